@@ -1,0 +1,39 @@
+#pragma once
+// Digital surface models (2.5D height grids) and conversions to/from meshes.
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/mesh/mesh.h"
+
+namespace satmesh {
+
+// A north-up grid: cell (i, j) has its centre at
+//   x = gt[0] + (i + 0.5) * gt[1], y = gt[3] + (j + 0.5) * gt[5]   (gt[2] = gt[4] = 0).
+struct Dsm {
+  int width = 0, height = 0;
+  std::array<double, 6> geo_transform{0, 1, 0, 0, 0, -1};
+  std::string crs_wkt;
+  std::vector<float> z;  // row-major; NaN = no data
+
+  float at(int i, int j) const { return z[size_t(j) * width + i]; }
+  float& at(int i, int j) { return z[size_t(j) * width + i]; }
+  double CellCenterX(int i) const { return geo_transform[0] + (i + 0.5) * geo_transform[1]; }
+  double CellCenterY(int j) const { return geo_transform[3] + (j + 0.5) * geo_transform[5]; }
+};
+
+// Reads band 1 as float; the band's nodata value becomes NaN. Rotated grids are rejected.
+Dsm ReadDsm(const std::string& path);
+// Float32 GeoTIFF, NaN nodata, deflate-compressed.
+void WriteDsm(const std::string& path, const Dsm& dsm);
+
+// Grid triangulation of the valid cells (vertex at each cell centre, two triangles per
+// 2x2 block of valid cells; nodata holes stay open). Origin: the grid centre.
+TriangleMesh MeshFromDsm(const Dsm& dsm);
+
+// Rasterises a mesh on `grid`'s geometry (size, transform, CRS; its z is ignored) by the
+// highest hit of a vertical ray through each cell centre (Embree); NaN where no hit.
+// mesh.origin + vertices must be in grid's CRS.
+Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid);
+
+}  // namespace satmesh

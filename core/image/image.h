@@ -1,0 +1,43 @@
+#pragma once
+// A single-band float image and the operations the refinement needs. Pixel coordinates
+// follow GDAL: pixel (i, j) covers [i, i+1) x [j, j+1); its centre is (i+0.5, j+0.5).
+#include <cstddef>
+#include <vector>
+
+namespace satmesh {
+
+struct ImageF {
+  int width = 0;
+  int height = 0;
+  std::vector<float> pixels;  // row-major, width*height
+
+  ImageF() = default;
+  ImageF(int w, int h, float value = 0.f) : width(w), height(h), pixels(size_t(w) * h, value) {}
+  bool empty() const { return pixels.empty(); }
+  float& at(int col, int row) { return pixels[size_t(row) * width + col]; }
+  float at(int col, int row) const { return pixels[size_t(row) * width + col]; }
+};
+
+// Bilinear sample at continuous (x, y) in GDAL pixel convention. Returns false (and
+// leaves outputs untouched) when the 2x2 support leaves the image.
+bool SampleBilinear(const ImageF& image, double x, double y, float* value);
+// Value and analytic gradient (d/dx, d/dy) of the bilinear interpolant of `image`.
+bool SampleBilinearWithGradient(const ImageF& image, double x, double y, float* value,
+                                float* d_dx, float* d_dy);
+
+// Central-difference gradients (per pixel unit), same size as the input.
+void ComputeGradients(const ImageF& image, ImageF* d_dx, ImageF* d_dy);
+
+// Gaussian pyramid: level 0 is the input, level l has size ceil(size / 2^l); level l's
+// pixel grid is level 0's scaled by 1/2^l (corner-origin), matching RpcModel::AtLevel.
+std::vector<ImageF> GaussianPyramid(const ImageF& image, int levels);
+
+struct RadiometryOptions {
+  double low_percentile = 0.5;    // clipped low end, in percent, in [0, 50)
+  double high_percentile = 99.5;  // clipped high end, in percent, in (50, 100]
+};
+// Maps the image affinely so that the given percentiles become 0 and 1 (values beyond
+// are kept, not clipped): 11-16 bit images become comparable unit-range images.
+ImageF NormalizeRadiometry(const ImageF& image, const RadiometryOptions& options = {});
+
+}  // namespace satmesh

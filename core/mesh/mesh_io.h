@@ -1,0 +1,28 @@
+#pragma once
+// Mesh files: PLY (ASCII/binary, float/double vertices), OBJ, Draco (.drc), glTF binary
+// (.glb with KHR_draco_mesh_compression). The format follows the file extension.
+#include <string>
+
+#include "core/mesh/mesh.h"
+
+namespace satmesh {
+
+struct MeshWriteOptions {
+  bool ply_binary = true;          // PLY: binary little endian (else ASCII)
+  bool ply_double = true;          // PLY: vertex x,y,z as double (origin added)
+  int draco_position_bits = 16;    // Draco/glb position quantisation, in [8, 30]
+  int draco_speed = 5;             // Draco encoder speed, in [0, 10] (0 = best ratio)
+};
+
+// PLY/OBJ: absolute coordinates (origin + vertex) written in double where the format
+// allows. DRC/GLB: positions written tile-local (vertices only; origin is the caller's
+// transform, e.g. in tileset.json). Throws Error naming the file on failure.
+void WriteMesh(const std::string& path, const TriangleMesh& mesh,
+               const MeshWriteOptions& options = {});
+
+// Reads by extension. PLY/OBJ: origin is set to the bounding-box centre (rounded to
+// metres) so vertices stay tile-local floats. Truncated or inconsistent files, NaN
+// coordinates and out-of-range indices throw Error{kInvalidInput} naming the file.
+TriangleMesh ReadMesh(const std::string& path);
+
+}  // namespace satmesh

@@ -1,0 +1,31 @@
+#pragma once
+// Adjacency and differential quantities of a TriangleMesh.
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/mesh/mesh.h"
+
+namespace satmesh {
+
+// Compressed one-ring adjacency (CSR): neighbours of vertex v are
+// neighbors[offsets[v] .. offsets[v+1]), incident faces likewise.
+struct VertexAdjacency {
+  std::vector<int> neighbor_offsets, neighbors;
+  std::vector<int> face_offsets, faces;
+  std::vector<bool> is_boundary;  // on an open edge (an edge used by one face only)
+};
+VertexAdjacency BuildVertexAdjacency(const TriangleMesh& mesh);
+
+// Unit face normals (right-hand rule on the face's vertex order) and areas.
+std::vector<Eigen::Vector3f> FaceNormals(const TriangleMesh& mesh);
+std::vector<float> FaceAreas(const TriangleMesh& mesh);
+// Area-weighted unit vertex normals.
+std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh);
+
+// 1 -> 4 subdivision: each edge split at its midpoint (shared edges split once).
+TriangleMesh Subdivide1To4(const TriangleMesh& mesh);
+
+// Mean edge length.
+double MeanEdgeLength(const TriangleMesh& mesh);
+
+}  // namespace satmesh
