@@ -13,5 +13,10 @@ function(satmesh_test name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
+  # Real data beside the repository (../shared/data); tests GTEST_SKIP when it is absent.
+  target_compile_definitions(${name} PRIVATE
+    SATMESH_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data"
+    SATMESH_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 600)
 endfunction()
