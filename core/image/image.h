@@ -2,6 +2,7 @@
 // A single-band float image and the operations the refinement needs. Pixel coordinates
 // follow GDAL: pixel (i, j) covers [i, i+1) x [j, j+1); its centre is (i+0.5, j+0.5).
 #include <cstddef>
+#include <string>
 #include <vector>
 
 namespace satmesh {
@@ -35,9 +36,13 @@ std::vector<ImageF> GaussianPyramid(const ImageF& image, int levels);
 struct RadiometryOptions {
   double low_percentile = 0.5;    // clipped low end, in percent, in [0, 50)
   double high_percentile = 99.5;  // clipped high end, in percent, in (50, 100]
+
+  std::string Check() const;  // "" or a message naming the bad field
 };
 // Maps the image affinely so that the given percentiles become 0 and 1 (values beyond
 // are kept, not clipped): 11-16 bit images become comparable unit-range images.
+// Non-finite pixels are ignored for the percentiles. A constant image is only shifted.
+// Throws Error{kInvalidArgument} when options.Check() fails.
 ImageF NormalizeRadiometry(const ImageF& image, const RadiometryOptions& options = {});
 
 }  // namespace satmesh
