@@ -53,12 +53,13 @@ void CheckScale(double v, const char* field) {
                 std::string("RPC field ") + field + " is zero (a scale must be non-zero)");
 }
 
-// Parses a number, allowing a trailing unit word as in _RPC.TXT ("+0.5 pixels").
-double ParseNumber(const std::string& text, const std::string& key) {
+// Parses a number; with allow_unit, a trailing unit word as in _RPC.TXT ("+0.5 pixels").
+double ParseNumber(const std::string& text, const std::string& key, bool allow_unit) {
   const char* begin = text.c_str();
   char* end = nullptr;
   const double v = std::strtod(begin, &end);
   bool ok = end != begin;
+  if (ok && !allow_unit) ok = *end == '\0';
   if (ok) {
     for (const char* c = end; *c; ++c) {
       if (!std::isalpha(static_cast<unsigned char>(*c)) &&
@@ -91,7 +92,7 @@ std::array<double, kTerms> ParseCoefficients(const std::map<std::string, std::st
   while (in >> token) {
     SATMESH_CHECK(n < kTerms, ErrorCode::kInvalidInput,
                   "RPC key " + key + ": more than 20 coefficients");
-    out[n] = ParseNumber(token, key + "[" + std::to_string(n) + "]");
+    out[n] = ParseNumber(token, key + "[" + std::to_string(n) + "]", /*allow_unit=*/false);
     ++n;
   }
   SATMESH_CHECK(n == kTerms, ErrorCode::kInvalidInput,
@@ -154,7 +155,7 @@ RpcModel RpcModel::FromKeyValues(const std::map<std::string, std::string>& md) {
       {&c.height_off, "HEIGHT_OFF"}, {&c.line_scale, "LINE_SCALE"},
       {&c.samp_scale, "SAMP_SCALE"}, {&c.lat_scale, "LAT_SCALE"},
       {&c.long_scale, "LONG_SCALE"}, {&c.height_scale, "HEIGHT_SCALE"}};
-  for (const auto& [field, key] : scalars) *field = ParseNumber(Lookup(md, key), key);
+  for (const auto& [field, key] : scalars) *field = ParseNumber(Lookup(md, key), key, /*allow_unit=*/true);
   c.line_num = ParseCoefficients(md, "LINE_NUM_COEFF");
   c.line_den = ParseCoefficients(md, "LINE_DEN_COEFF");
   c.samp_num = ParseCoefficients(md, "SAMP_NUM_COEFF");
@@ -212,7 +213,7 @@ Eigen::Vector2d RpcModel::PixelFromGeo(const Eigen::Vector3d& lon_lat_h,
                    double out_scale, double* value, double* grad) {
     const double n = Dot(num, m), d = Dot(den, m);
     const double inv_d = 1.0 / d;
-    *value = n * inv_d;
+    *value = n / d;  // as in the plain overload, bit for bit
     for (int k = 0; k < 3; ++k) {
       const double dn = Dot(num, *dm[k]), dd = Dot(den, *dm[k]);
       grad[k] = (dn * d - n * dd) * inv_d * inv_d * inv_norm[k] * out_scale;
