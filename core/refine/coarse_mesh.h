@@ -1,0 +1,19 @@
+#pragma once
+// The coarse mesh the refinement starts from (paper 3.3): the initial surface remeshed
+// isotropically (CGAL) to a target edge length, so triangles are well shaped on walls
+// too. Boundary edges are kept on the boundary (split, never moved inward).
+#include "core/mesh/mesh.h"
+
+namespace satmesh {
+
+struct CoarseMeshOptions {
+  double target_edge_m = 2.0;  // target edge length, metres, > 0
+  int iterations = 3;          // CGAL isotropic remeshing iterations, [1, 20]
+  std::string Check() const;
+};
+
+// Non-manifold faces of the input are dropped (logged). Throws Error{kInvalidInput} if
+// nothing is left.
+TriangleMesh RemeshIsotropic(const TriangleMesh& mesh, const CoarseMeshOptions& options);
+
+}  // namespace satmesh

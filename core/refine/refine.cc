@@ -1,0 +1,228 @@
+#include "core/refine/refine.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "core/common/error.h"
+#include "core/mesh/topology.h"
+#include "core/raycast/ray_scene.h"
+#include "core/refine/coarse_mesh.h"
+#include "core/refine/pairs.h"
+#include "core/refine/photometric_gradient.h"
+#include "core/refine/thin_plate.h"
+#include "core/refine/view_level.h"
+
+namespace satmesh {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// Full-resolution ground sampling distance of a view at the frame centre (mean terrain).
+double GroundSamplingDistance(const RpcModel& rpc, const LocalFrame& frame) {
+  Eigen::Matrix<double, 2, 3> pixel_from_geo;
+  rpc.PixelFromGeo(frame.center_lon_lat_h(), &pixel_from_geo);
+  const Eigen::Matrix<double, 2, 3> pixel_from_local =
+      pixel_from_geo * frame.GeoFromLocalScale().asDiagonal();
+  const double det = std::abs(pixel_from_local.leftCols<2>().determinant());  // px² per m²
+  return 1.0 / std::sqrt(det);
+}
+
+double StdDev(const ImageF& image) {
+  double sum = 0, sum2 = 0;
+  for (float v : image.pixels) sum += v, sum2 += double(v) * v;
+  const double n = double(image.pixels.size());
+  return std::sqrt(std::max(0.0, sum2 / n - (sum / n) * (sum / n)));
+}
+
+void CheckInput(const RefineInput& input) {
+  SATMESH_CHECK(input.views.size() >= 2, ErrorCode::kInvalidInput,
+                "refine: need at least 2 views, got " + std::to_string(input.views.size()));
+  for (const auto& v : input.views)
+    SATMESH_CHECK(!v.image.empty(), ErrorCode::kInvalidInput, "refine: view '" + v.name + "' has no pixels");
+  SATMESH_CHECK(!input.initial_mesh.faces.empty(), ErrorCode::kInvalidInput,
+                "refine: the initial mesh has no faces");
+  SATMESH_CHECK(input.max_z > input.min_z, ErrorCode::kInvalidInput,
+                "refine: empty height range [min_z, max_z]");
+}
+
+// Everything of one view that does not depend on the level.
+struct ViewSource {
+  std::vector<ImageF> pyramid;  // normalised
+  RpcModel rpc;
+};
+
+struct LevelContext {
+  const RefineInput& input;
+  const RefineOptions& options;
+  const Progress& progress;
+  std::vector<ViewSource>& sources;
+  std::vector<std::pair<int, int>>& pairs;
+  double gsd_m;
+};
+
+// Mean ZNCC over all pair-directions; fills the gradient and per-vertex pair counts.
+double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& slot,
+                       const std::vector<std::pair<int, int>>& pairs, const TriangleMesh& mesh,
+                       const LocalFrame& frame, const PhotometricOptions& options,
+                       std::vector<Eigen::Vector3d>* gradient, std::vector<int>* seen) {
+  const auto normals = FaceNormals(mesh);
+  std::vector<uint8_t> touched(mesh.vertices.size());
+  double sum = 0;
+  long count = 0;
+  for (const auto& [i, j] : pairs) {
+    for (const auto& [a, b] : {std::pair{i, j}, std::pair{j, i}}) {
+      std::fill(touched.begin(), touched.end(), 0);
+      const PairEnergy e = AccumulatePhotometricGradient(views[slot[a]], views[slot[b]], mesh,
+                                                         normals, frame, options, gradient,
+                                                         seen ? &touched : nullptr);
+      sum += e.sum_zncc;
+      count += e.num_windows;
+      if (seen)
+        for (size_t v = 0; v < touched.size(); ++v) (*seen)[v] += touched[v];
+    }
+  }
+  return count > 0 ? sum / count : 0.0;
+}
+
+LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
+  const auto level_start = Clock::now();
+  const RefineOptions& opt = ctx.options;
+  LevelStats stats;
+  stats.level = level;
+  stats.gsd_m = ctx.gsd_m * std::ldexp(1.0, level);
+  const double gsd = stats.gsd_m;
+
+  // Views that take part in a pair, at this level.
+  std::vector<int> slot(ctx.sources.size(), -1);
+  std::vector<ViewLevel> views;
+  const double margin = 2.0 + 0.1 * (ctx.input.max_z - ctx.input.min_z);
+  for (const auto& [i, j] : ctx.pairs) {
+    for (int v : {i, j}) {
+      if (slot[v] >= 0) continue;
+      slot[v] = int(views.size());
+      views.push_back(MakeViewLevel(v, level, ctx.sources[v].pyramid[level], ctx.sources[v].rpc,
+                                    ctx.input.frame, ctx.input.min_z - margin,
+                                    ctx.input.max_z + margin, opt.virtual_camera_grid_px));
+    }
+  }
+
+  PhotometricOptions photo;
+  photo.zncc.window_radius = opt.zncc_window_radius;
+  photo.zncc.min_valid_fraction = opt.min_window_valid;
+  photo.zncc.variance_floor = opt.variance_floor;
+  photo.visibility_tolerance_m = opt.visibility_tolerance_gsd * gsd;
+  photo.min_ray_cos = opt.min_ray_cos;
+
+  RayScene scene(*mesh);
+  const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
+  const size_t nv = mesh->vertices.size();
+  stats.num_vertices = int(nv);
+  stats.num_faces = int(mesh->faces.size());
+  std::vector<Eigen::Vector3d> gradient(nv);
+  std::vector<int> seen(nv);
+
+  for (int it = 0; it <= opt.iterations_per_level; ++it) {
+    ctx.progress.ThrowIfCancelled();
+    const bool last = it == opt.iterations_per_level;
+    auto t0 = Clock::now();
+    for (auto& v : views) CastHitMap(scene, &v);
+    stats.times.raycast_s += Seconds(t0);
+
+    t0 = Clock::now();
+    std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
+    std::fill(seen.begin(), seen.end(), 0);
+    const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, ctx.input.frame, photo,
+                                        last ? nullptr : &gradient, last ? nullptr : &seen);
+    stats.mean_zncc.push_back(zncc);
+    stats.times.gradient_s += Seconds(t0);
+    if (last) break;
+
+    t0 = Clock::now();
+    const auto u2 = UmbrellaSquared(mesh->vertices, adjacency);
+    stats.times.smoothness_s += Seconds(t0);
+
+    // Gradient step: photometric part in units of GSD², thin-plate homogenised by 1/GSD².
+    t0 = Clock::now();
+    const double photo_scale = opt.step * opt.alpha * gsd * gsd;
+    const double smooth_scale = opt.step * opt.beta;
+    const double max_move = opt.max_step_gsd * gsd;
+#pragma omp parallel for schedule(static)
+    for (long v = 0; v < long(nv); ++v) {
+      Eigen::Vector3d g = gradient[v];
+      if (opt.normalize_by_pair_count && seen[v] > 1) g /= double(seen[v]);
+      Eigen::Vector3d move = -photo_scale * g - smooth_scale * u2[v].cast<double>();
+      if (opt.hold_boundary_xy && adjacency.is_boundary[v]) move.x() = move.y() = 0;
+      const double len = move.norm();
+      if (len > max_move) move *= max_move / len;
+      mesh->vertices[v] += move.cast<float>();
+    }
+    scene.UpdateVertices(mesh->vertices);
+    stats.times.update_s += Seconds(t0);
+    ++stats.iterations;
+    const double done = (opt.levels - level + double(it + 1) / (opt.iterations_per_level + 1));
+    ctx.progress.Report(done / (opt.levels + 1), "level " + std::to_string(level));
+  }
+  stats.level_s = Seconds(level_start);
+  spdlog::info("level {}: {} vertices, {} faces, GSD {:.2f} m, mean ZNCC {:.4f} -> {:.4f} ({:.1f} s)",
+               level, stats.num_vertices, stats.num_faces, gsd, stats.mean_zncc.front(),
+               stats.mean_zncc.back(), stats.level_s);
+  return stats;
+}
+
+}  // namespace
+
+RefineResult Refine(const RefineInput& input, const RefineOptions& options,
+                    const Progress& progress) {
+  const std::string problem = options.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "refine options: " + problem);
+  CheckInput(input);
+  const auto start = Clock::now();
+  RefineResult result;
+
+  // Radiometric normalisation and pyramids; viewing directions for pair selection.
+  std::vector<ViewSource> sources(input.views.size());
+  std::vector<PairCandidateView> candidates(input.views.size());
+  double gsd_sum = 0;
+  for (size_t v = 0; v < input.views.size(); ++v) {
+    const ImageF normalised = NormalizeRadiometry(input.views[v].image);
+    candidates[v].contrast = StdDev(normalised);
+    sources[v].pyramid = GaussianPyramid(normalised, options.levels + 1);
+    sources[v].rpc = input.views[v].rpc;
+    const VirtualCamera camera(input.views[v].rpc, input.frame, normalised.width,
+                               normalised.height, input.min_z - 1, input.max_z + 1,
+                               std::max(normalised.width, normalised.height));
+    candidates[v].direction = camera.CentralDirection();
+    gsd_sum += GroundSamplingDistance(input.views[v].rpc, input.frame);
+  }
+  result.gsd_m = gsd_sum / input.views.size();
+  result.pairs = SelectPairs(candidates, options.pairs);
+  SATMESH_CHECK(!result.pairs.empty(), ErrorCode::kInvalidInput,
+                "refine: no stereo pair with an intersection angle in [" +
+                    std::to_string(options.pairs.min_angle_deg) + ", " +
+                    std::to_string(options.pairs.max_angle_deg) + "] degrees");
+  spdlog::info("refine: {} views, {} pairs, GSD {:.3f} m", input.views.size(),
+               result.pairs.size(), result.gsd_m);
+
+  TriangleMesh mesh = input.initial_mesh;
+  if (options.remesh_coarse) {
+    CoarseMeshOptions coarse;
+    coarse.target_edge_m = options.coarse_edge_px * result.gsd_m * std::ldexp(1.0, options.levels);
+    mesh = RemeshIsotropic(mesh, coarse);
+  }
+  const LevelContext ctx{input, options, progress, sources, result.pairs, result.gsd_m};
+  for (int level = options.levels; level >= 0; --level) {
+    if (level < options.levels) mesh = Subdivide1To4(mesh);
+    result.levels.push_back(RefineLevel(ctx, level, &mesh));
+  }
+  result.mesh = std::move(mesh);
+  result.total_s = Seconds(start);
+  progress.Report(1.0, "done");
+  return result;
+}
+
+}  // namespace satmesh

@@ -1,0 +1,57 @@
+#pragma once
+// The refinement: photometric multi-view mesh refinement under the RFM (Rothermel et al.
+// 2020), coarse to fine. One entry point, Refine(); everything runs in a LocalFrame.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/common/progress.h"
+#include "core/geo/local_frame.h"
+#include "core/image/image.h"
+#include "core/mesh/mesh.h"
+#include "core/refine/refine_options.h"
+#include "core/rpc/rpc_model.h"
+
+namespace satmesh {
+
+struct RefineView {
+  std::string name;
+  ImageF image;  // full-resolution window, raw digital numbers
+  RpcModel rpc;  // pixel coordinates relative to the window (RpcModel::Cropped)
+};
+
+struct RefineInput {
+  std::vector<RefineView> views;
+  TriangleMesh initial_mesh;  // vertices in `frame` (x east, y north, z up; metres)
+  LocalFrame frame;
+  double min_z = 0, max_z = 0;  // height range (frame z) the surface stays within
+};
+
+struct StageTimes {
+  double raycast_s = 0, gradient_s = 0, smoothness_s = 0, update_s = 0;
+};
+
+struct LevelStats {
+  int level = 0;
+  int iterations = 0;
+  int num_vertices = 0, num_faces = 0;
+  double gsd_m = 0;                    // ground sampling distance of the level
+  std::vector<double> mean_zncc;       // before each iteration, and after the last
+  StageTimes times;
+  double level_s = 0;
+};
+
+struct RefineResult {
+  TriangleMesh mesh;                   // in the input frame
+  std::vector<std::pair<int, int>> pairs;
+  std::vector<LevelStats> levels;
+  double gsd_m = 0;                    // full-resolution GSD
+  double total_s = 0;
+};
+
+// Throws Error{kInvalidArgument} if options.Check() fails, Error{kInvalidInput} for
+// unusable input (no pair, empty mesh), Error{kCancelled} when progress says so.
+RefineResult Refine(const RefineInput& input, const RefineOptions& options,
+                    const Progress& progress = {});
+
+}  // namespace satmesh

@@ -1,0 +1,44 @@
+#include "core/refine/refine_options.h"
+
+#include <string>
+
+namespace satmesh {
+namespace {
+std::string Num(double v) { return std::to_string(v); }
+}  // namespace
+
+std::string PairOptions::Check() const {
+  if (!(min_angle_deg > 0 && min_angle_deg < 90))
+    return "pairs.min_angle_deg must be in (0, 90), got " + Num(min_angle_deg);
+  if (!(max_angle_deg > min_angle_deg && max_angle_deg < 90))
+    return "pairs.max_angle_deg must be in (min_angle_deg, 90), got " + Num(max_angle_deg);
+  if (max_pairs_per_image < 1)
+    return "pairs.max_pairs_per_image must be >= 1, got " + Num(max_pairs_per_image);
+  if (!(min_contrast >= 0)) return "pairs.min_contrast must be >= 0, got " + Num(min_contrast);
+  return "";
+}
+
+std::string RefineOptions::Check() const {
+  if (levels < 0 || levels > 6) return "levels must be in [0, 6], got " + Num(levels);
+  if (iterations_per_level < 0 || iterations_per_level > 1000)
+    return "iterations_per_level must be in [0, 1000], got " + Num(iterations_per_level);
+  if (!(alpha >= 0)) return "alpha must be >= 0, got " + Num(alpha);
+  if (!(beta >= 0)) return "beta must be >= 0, got " + Num(beta);
+  if (!(step > 0)) return "step must be > 0, got " + Num(step);
+  if (!(max_step_gsd > 0)) return "max_step_gsd must be > 0, got " + Num(max_step_gsd);
+  if (zncc_window_radius < 1 || zncc_window_radius > 7)
+    return "zncc_window_radius must be in [1, 7], got " + Num(zncc_window_radius);
+  if (!(min_window_valid > 0 && min_window_valid <= 1))
+    return "min_window_valid must be in (0, 1], got " + Num(min_window_valid);
+  if (!(variance_floor > 0)) return "variance_floor must be > 0, got " + Num(variance_floor);
+  if (!(visibility_tolerance_gsd > 0))
+    return "visibility_tolerance_gsd must be > 0, got " + Num(visibility_tolerance_gsd);
+  if (!(min_ray_cos >= 0 && min_ray_cos < 1))
+    return "min_ray_cos must be in [0, 1), got " + Num(min_ray_cos);
+  if (virtual_camera_grid_px < 1)
+    return "virtual_camera_grid_px must be >= 1, got " + Num(virtual_camera_grid_px);
+  if (!(coarse_edge_px > 0)) return "coarse_edge_px must be > 0, got " + Num(coarse_edge_px);
+  return pairs.Check();
+}
+
+}  // namespace satmesh

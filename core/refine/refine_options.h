@@ -1,0 +1,41 @@
+#pragma once
+// Options of the refinement (DESIGN.md "The method"). Defaults were tuned on synthetic
+// scenes from `satmesh synth` (see BENCHMARKS.md for the runs that chose them).
+#include <string>
+
+namespace satmesh {
+
+// Stereo pair selection (paper 4.2).
+struct PairOptions {
+  double min_angle_deg = 5.0;    // min intersection angle of the viewing directions, (0, 90)
+  double max_angle_deg = 13.0;   // max intersection angle, (min_angle_deg, 90)
+  int max_pairs_per_image = 4;   // cap on pairs that involve one image, >= 1
+  double min_contrast = 0.02;    // images whose normalised std is below this are dropped, >= 0
+  std::string Check() const;
+};
+
+struct RefineOptions {
+  int levels = 3;                  // coarsest pyramid level L (images at 1/2^L), [0, 6]
+  int iterations_per_level = 20;   // gradient steps per level, [0, 1000]
+  double alpha = 1.0;              // weight of the photometric term M, >= 0
+  double beta = 0.2;               // weight of the thin-plate term (homogenised by 1/GSD²), >= 0
+  double step = 0.5;               // gradient step, in units of (level GSD)², > 0
+  double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD, > 0
+  int zncc_window_radius = 2;      // ZNCC window (2r+1)², r in [1, 7]
+  double min_window_valid = 0.5;   // min fraction of valid pixels in a ZNCC window, (0, 1]
+  double variance_floor = 1e-4;    // floor of the windows' variances (unit-range images), > 0
+  double visibility_tolerance_gsd = 2.0;  // depth test tolerance, in level GSD, > 0
+  double min_ray_cos = 0.1;        // |cos| between ray and face normal below which a pixel is
+                                   // ignored (grazing views), [0, 1)
+  int virtual_camera_grid_px = 16; // spacing of exactly localised rays, in level pixels, >= 1
+  double coarse_edge_px = 2.0;     // edge length of the coarse mesh at level L, in level px, > 0
+  bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
+  bool normalize_by_pair_count = true;  // divide each vertex's photometric gradient by the
+                                        // number of pair-directions that saw it (OpenMVS)
+  bool hold_boundary_xy = true;    // boundary vertices move vertically only (tile seams)
+  PairOptions pairs;
+
+  std::string Check() const;
+};
+
+}  // namespace satmesh

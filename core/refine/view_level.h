@@ -1,0 +1,39 @@
+#pragma once
+// One view at one pyramid level: normalised image, level RPC, virtual camera, the rays
+// of all its pixels (fixed for the level), and the hit map of the current mesh.
+#include <vector>
+
+#include "core/image/image.h"
+#include "core/raycast/ray_scene.h"
+#include "core/refine/virtual_camera.h"
+#include "core/rpc/rpc_model.h"
+
+namespace satmesh {
+
+struct HitMap {
+  std::vector<RayHit> hits;             // one per pixel, row-major
+  std::vector<Eigen::Vector3f> points;  // hit points (frame), valid where hits[i].hit()
+};
+
+struct ViewLevel {
+  int view = 0;
+  int level = 0;
+  ImageF image;        // normalised radiometry, pyramid level
+  RpcModel rpc;        // pixel coordinates of this level
+  VirtualCamera camera;
+  std::vector<Ray> rays;  // per pixel
+  HitMap hit_map;
+
+  int width() const { return image.width; }
+  int height() const { return image.height; }
+};
+
+// Builds the level data (rays from the virtual camera) of one view.
+ViewLevel MakeViewLevel(int view, int level, ImageF image_level, const RpcModel& rpc_window,
+                        const LocalFrame& frame, double z_low, double z_high, int grid_px);
+
+// Casts all rays of the view against the scene (the paper's dominant cost: once per view
+// per iteration, shared by all pairs).
+void CastHitMap(const RayScene& scene, ViewLevel* view);
+
+}  // namespace satmesh
