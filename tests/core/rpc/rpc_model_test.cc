@@ -96,7 +96,7 @@ TEST(RpcModel, ZeroScaleIsNamed) {
                                          "HEIGHT_SCALE"};
   for (const std::string& key : keys) {
     auto md = Models()[0].ToKeyValues();
-    md[key] = "0";
+    md[key] = std::string(1, '0');  // (a literal trips GCC 12 -Wrestrict)
     const std::string message = ErrorMessage(md);
     EXPECT_NE(message.find(key), std::string::npos) << message;
     EXPECT_NE(message.find("is zero"), std::string::npos) << message;
