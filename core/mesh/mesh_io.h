@@ -12,17 +12,26 @@ struct MeshWriteOptions {
   bool ply_double = true;          // PLY: vertex x,y,z as double (origin added)
   int draco_position_bits = 16;    // Draco/glb position quantisation, in [8, 30]
   int draco_speed = 5;             // Draco encoder speed, in [0, 10] (0 = best ratio)
+
+  std::string Check() const;  // "" or a message naming the bad field
 };
 
 // PLY/OBJ: absolute coordinates (origin + vertex) written in double where the format
 // allows. DRC/GLB: positions written tile-local (vertices only; origin is the caller's
-// transform, e.g. in tileset.json). Throws Error naming the file on failure.
+// transform, e.g. in tileset.json). Throws Error naming the file on failure:
+// kInvalidArgument for bad options or an unknown extension, kInvalidInput for an
+// invalid mesh (ValidateMesh), kIo when the file cannot be written.
 void WriteMesh(const std::string& path, const TriangleMesh& mesh,
                const MeshWriteOptions& options = {});
 
 // Reads by extension. PLY/OBJ: origin is set to the bounding-box centre (rounded to
 // metres) so vertices stay tile-local floats. Truncated or inconsistent files, NaN
 // coordinates and out-of-range indices throw Error{kInvalidInput} naming the file.
+// PLY: ascii / binary little or big endian; any scalar type for x, y, z (other vertex
+// properties are skipped); faces from "vertex_indices" or "vertex_index" lists; other
+// elements skipped. PLY/OBJ polygons are fan-triangulated. OBJ: v and f lines (v/vt/vn
+// forms, negative indices). DRC/GLB: origin 0, positions as stored. A "crs" comment
+// written by WriteMesh (PLY/OBJ) is read back into mesh.crs.
 TriangleMesh ReadMesh(const std::string& path);
 
 }  // namespace satmesh

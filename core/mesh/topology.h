@@ -14,18 +14,26 @@ struct VertexAdjacency {
   std::vector<int> face_offsets, faces;
   std::vector<bool> is_boundary;  // on an open edge (an edge used by one face only)
 };
+// Neighbours of each vertex are sorted ascending; faces in ascending face order. O(n).
+// Indices are not validated (call ValidateMesh first on untrusted meshes).
 VertexAdjacency BuildVertexAdjacency(const TriangleMesh& mesh);
 
-// Unit face normals (right-hand rule on the face's vertex order) and areas.
+// Unit face normals (right-hand rule on the face's vertex order; zero for degenerate
+// faces) and areas.
 std::vector<Eigen::Vector3f> FaceNormals(const TriangleMesh& mesh);
 std::vector<float> FaceAreas(const TriangleMesh& mesh);
 // Area-weighted unit vertex normals.
 std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh);
 
 // 1 -> 4 subdivision: each edge split at its midpoint (shared edges split once).
+// Original vertices keep their indices; midpoints follow. Face f becomes faces
+// 4f..4f+3 (three corner triangles, then the centre one), orientation preserved.
 TriangleMesh Subdivide1To4(const TriangleMesh& mesh);
 
-// Mean edge length.
+// Mean length of the unique (undirected) edges; 0 for a mesh without faces.
 double MeanEdgeLength(const TriangleMesh& mesh);
+
+// Unique undirected edges (a < b), sorted. O(n log n).
+std::vector<Eigen::Vector2i> UniqueEdges(const TriangleMesh& mesh);
 
 }  // namespace satmesh

@@ -1,0 +1,119 @@
+#include "core/mesh/mesh_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include "core/common/error.h"
+#include "core/mesh/mesh_io_internal.h"
+
+namespace satmesh {
+namespace {
+
+std::string Extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+}  // namespace
+
+namespace mesh_io_internal {
+
+std::string ReadFileBytes(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    ThrowError(ErrorCode::kNotFound, "mesh file not found: " + path);
+  std::ifstream in(path, std::ios::binary);
+  SATMESH_CHECK(in.good(), ErrorCode::kIo, "cannot open mesh file " + path);
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  in.seekg(0, std::ios::beg);
+  std::string bytes(size_t(std::max<std::streamoff>(size, 0)), '\0');
+  in.read(bytes.data(), std::streamsize(bytes.size()));
+  SATMESH_CHECK(in.good() || in.eof(), ErrorCode::kIo, "cannot read mesh file " + path);
+  return bytes;
+}
+
+void WriteFileBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  SATMESH_CHECK(out.good(), ErrorCode::kIo, "cannot create mesh file " + path);
+  out.write(bytes.data(), std::streamsize(bytes.size()));
+  out.close();
+  SATMESH_CHECK(!out.fail(), ErrorCode::kIo, "cannot write mesh file " + path);
+}
+
+void SetTileLocalVertices(const std::string& path, const std::vector<double>& xyz,
+                          TriangleMesh* mesh) {
+  const size_t n = xyz.size() / 3;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+    if (!p.allFinite())
+      ThrowError(ErrorCode::kInvalidInput,
+                 path + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  mesh->origin = n ? Eigen::Vector3d((0.5 * (lo + hi)).array().round()) : Eigen::Vector3d::Zero();
+  mesh->vertices.resize(n);
+  for (size_t i = 0; i < n; ++i)
+    mesh->vertices[i] = (Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]) -
+                         mesh->origin).cast<float>();
+}
+
+void AddPolygon(const std::string& path, const std::string& polygon, const long long* corners,
+                int count, long long num_vertices, TriangleMesh* mesh) {
+  if (count < 3)
+    ThrowError(ErrorCode::kInvalidInput, path + ": " + polygon + " has " +
+                                             std::to_string(count) + " vertices (need >= 3)");
+  for (int k = 0; k < count; ++k)
+    if (corners[k] < 0 || corners[k] >= num_vertices)
+      ThrowError(ErrorCode::kInvalidInput,
+                 path + ": " + polygon + " has vertex index " + std::to_string(corners[k]) +
+                     " out of range [0, " + std::to_string(num_vertices) + ")");
+  for (int k = 1; k + 1 < count; ++k)
+    mesh->faces.emplace_back(int(corners[0]), int(corners[k]), int(corners[k + 1]));
+}
+
+}  // namespace mesh_io_internal
+
+std::string MeshWriteOptions::Check() const {
+  if (draco_position_bits < 8 || draco_position_bits > 30)
+    return "draco_position_bits must be in [8, 30], got " + std::to_string(draco_position_bits);
+  if (draco_speed < 0 || draco_speed > 10)
+    return "draco_speed must be in [0, 10], got " + std::to_string(draco_speed);
+  return "";
+}
+
+void WriteMesh(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options) {
+  const std::string problem = options.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument,
+                "MeshWriteOptions for " + path + ": " + problem);
+  ValidateMesh(mesh, path);
+  const std::string ext = Extension(path);
+  if (ext == ".ply") return mesh_io_internal::WritePly(path, mesh, options);
+  if (ext == ".obj") return mesh_io_internal::WriteObj(path, mesh);
+  if (ext == ".drc") return mesh_io_internal::WriteDraco(path, mesh, options);
+  if (ext == ".glb") return mesh_io_internal::WriteGlb(path, mesh, options);
+  ThrowError(ErrorCode::kInvalidArgument,
+             "unknown mesh extension '" + ext + "' (use .ply, .obj, .drc, .glb): " + path);
+}
+
+TriangleMesh ReadMesh(const std::string& path) {
+  const std::string ext = Extension(path);
+  TriangleMesh mesh;
+  if (ext == ".ply") mesh = mesh_io_internal::ReadPly(path);
+  else if (ext == ".obj") mesh = mesh_io_internal::ReadObj(path);
+  else if (ext == ".drc") mesh = mesh_io_internal::ReadDraco(path);
+  else if (ext == ".glb") mesh = mesh_io_internal::ReadGlb(path);
+  else
+    ThrowError(ErrorCode::kInvalidArgument,
+               "unknown mesh extension '" + ext + "' (use .ply, .obj, .drc, .glb): " + path);
+  ValidateMesh(mesh, path);
+  return mesh;
+}
+
+}  // namespace satmesh

@@ -1,0 +1,160 @@
+#include "core/mesh/topology.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cstdint>
+#include <utility>
+
+namespace satmesh {
+namespace {
+
+uint64_t EdgeKey(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (uint64_t(uint32_t(a)) << 32) | uint32_t(b);
+}
+
+// Unnormalised face normal (twice the area vector), in double for accuracy.
+Eigen::Vector3d AreaVector2(const TriangleMesh& mesh, const Eigen::Vector3i& f) {
+  const Eigen::Vector3d a = mesh.vertices[f[0]].cast<double>();
+  const Eigen::Vector3d b = mesh.vertices[f[1]].cast<double>();
+  const Eigen::Vector3d c = mesh.vertices[f[2]].cast<double>();
+  return (b - a).cross(c - a);
+}
+
+// Prefix sums of counts into offsets (size n+1).
+std::vector<int> OffsetsFromCounts(const std::vector<int>& counts) {
+  std::vector<int> offsets(counts.size() + 1, 0);
+  for (size_t i = 0; i < counts.size(); ++i) offsets[i + 1] = offsets[i] + counts[i];
+  return offsets;
+}
+
+}  // namespace
+
+VertexAdjacency BuildVertexAdjacency(const TriangleMesh& mesh) {
+  const size_t n = mesh.vertices.size();
+  VertexAdjacency adj;
+  std::vector<int> counts(n, 0);
+  for (const auto& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) ++counts[f[k]];
+  adj.face_offsets = OffsetsFromCounts(counts);
+  adj.faces.resize(adj.face_offsets.back());
+  // Both other corners of each incident face, with repeats: an edge seen once is open.
+  std::vector<int> ring(2 * adj.faces.size());
+  std::vector<int> fill(adj.face_offsets.begin(), adj.face_offsets.end() - 1);
+  for (size_t fi = 0; fi < mesh.faces.size(); ++fi) {
+    const auto& f = mesh.faces[fi];
+    for (int k = 0; k < 3; ++k) {
+      const int v = f[k], slot = fill[v]++;
+      adj.faces[slot] = int(fi);
+      ring[2 * slot] = f[(k + 1) % 3];
+      ring[2 * slot + 1] = f[(k + 2) % 3];
+    }
+  }
+  adj.is_boundary.assign(n, false);
+  adj.neighbor_offsets.assign(n + 1, 0);
+  adj.neighbors.reserve(adj.faces.size() + n);
+  for (size_t v = 0; v < n; ++v) {
+    const auto begin = ring.begin() + 2 * adj.face_offsets[v];
+    const auto end = ring.begin() + 2 * adj.face_offsets[v + 1];
+    std::sort(begin, end);
+    for (auto it = begin; it != end;) {
+      auto next = it;
+      while (next != end && *next == *it) ++next;
+      if (next - it == 1) adj.is_boundary[v] = true;
+      adj.neighbors.push_back(*it);
+      it = next;
+    }
+    adj.neighbor_offsets[v + 1] = int(adj.neighbors.size());
+  }
+  return adj;
+}
+
+std::vector<Eigen::Vector3f> FaceNormals(const TriangleMesh& mesh) {
+  std::vector<Eigen::Vector3f> normals(mesh.faces.size());
+  for (size_t i = 0; i < mesh.faces.size(); ++i) {
+    const Eigen::Vector3d n = AreaVector2(mesh, mesh.faces[i]);
+    const double len = n.norm();
+    normals[i] = len > 0 ? Eigen::Vector3f((n / len).cast<float>()) : Eigen::Vector3f::Zero();
+  }
+  return normals;
+}
+
+std::vector<float> FaceAreas(const TriangleMesh& mesh) {
+  std::vector<float> areas(mesh.faces.size());
+  for (size_t i = 0; i < mesh.faces.size(); ++i)
+    areas[i] = float(0.5 * AreaVector2(mesh, mesh.faces[i]).norm());
+  return areas;
+}
+
+std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh) {
+  std::vector<Eigen::Vector3d> sums(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  for (const auto& f : mesh.faces) {
+    const Eigen::Vector3d n = AreaVector2(mesh, f);  // area-weighted
+    for (int k = 0; k < 3; ++k) sums[f[k]] += n;
+  }
+  std::vector<Eigen::Vector3f> normals(sums.size());
+  for (size_t i = 0; i < sums.size(); ++i) {
+    const double len = sums[i].norm();
+    normals[i] = len > 0 ? Eigen::Vector3f((sums[i] / len).cast<float>())
+                         : Eigen::Vector3f::Zero();
+  }
+  return normals;
+}
+
+TriangleMesh Subdivide1To4(const TriangleMesh& mesh) {
+  const size_t num_faces = mesh.faces.size();
+  // Sort the 3F corner edges by key; each run of equal keys is one new midpoint.
+  std::vector<std::pair<uint64_t, uint32_t>> corner_edges(3 * num_faces);
+  for (size_t f = 0; f < num_faces; ++f)
+    for (int k = 0; k < 3; ++k)
+      corner_edges[3 * f + k] = {EdgeKey(mesh.faces[f][k], mesh.faces[f][(k + 1) % 3]),
+                                 uint32_t(3 * f + k)};
+  std::sort(corner_edges.begin(), corner_edges.end());
+  TriangleMesh out;
+  out.origin = mesh.origin;
+  out.crs = mesh.crs;
+  out.vertices = mesh.vertices;
+  std::vector<int> midpoint(3 * num_faces);  // corner k's edge (k -> k+1) midpoint
+  for (size_t i = 0; i < corner_edges.size(); ++i) {
+    if (i == 0 || corner_edges[i].first != corner_edges[i - 1].first) {
+      const int a = int(corner_edges[i].first >> 32);
+      const int b = int(corner_edges[i].first & 0xffffffffu);
+      out.vertices.push_back(0.5f * (mesh.vertices[a] + mesh.vertices[b]));
+    }
+    midpoint[corner_edges[i].second] = int(out.vertices.size()) - 1;
+  }
+  out.faces.resize(4 * num_faces);
+  for (size_t f = 0; f < num_faces; ++f) {
+    const auto& v = mesh.faces[f];
+    const int m01 = midpoint[3 * f], m12 = midpoint[3 * f + 1], m20 = midpoint[3 * f + 2];
+    out.faces[4 * f + 0] = {v[0], m01, m20};
+    out.faces[4 * f + 1] = {m01, v[1], m12};
+    out.faces[4 * f + 2] = {m20, m12, v[2]};
+    out.faces[4 * f + 3] = {m01, m12, m20};
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector2i> UniqueEdges(const TriangleMesh& mesh) {
+  std::vector<uint64_t> keys;
+  keys.reserve(3 * mesh.faces.size());
+  for (const auto& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) keys.push_back(EdgeKey(f[k], f[(k + 1) % 3]));
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<Eigen::Vector2i> edges(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i)
+    edges[i] = {int(keys[i] >> 32), int(keys[i] & 0xffffffffu)};
+  return edges;
+}
+
+double MeanEdgeLength(const TriangleMesh& mesh) {
+  const std::vector<Eigen::Vector2i> edges = UniqueEdges(mesh);
+  if (edges.empty()) return 0.0;
+  double sum = 0;
+  for (const auto& e : edges)
+    sum += (mesh.vertices[e[0]].cast<double>() - mesh.vertices[e[1]].cast<double>()).norm();
+  return sum / double(edges.size());
+}
+
+}  // namespace satmesh
