@@ -64,15 +64,16 @@ void SetTileLocalVertices(const std::string& path, const std::vector<double>& xy
                          mesh->origin).cast<float>();
 }
 
-void AddPolygon(const std::string& path, const std::string& polygon, const long long* corners,
-                int count, long long num_vertices, TriangleMesh* mesh) {
+void AddPolygon(const std::string& path, const char* kind, size_t number,
+                const long long* corners, int count, long long num_vertices, TriangleMesh* mesh) {
+  const auto polygon = [&] { return std::string(kind) + " " + std::to_string(number); };
   if (count < 3)
-    ThrowError(ErrorCode::kInvalidInput, path + ": " + polygon + " has " +
+    ThrowError(ErrorCode::kInvalidInput, path + ": " + polygon() + " has " +
                                              std::to_string(count) + " vertices (need >= 3)");
   for (int k = 0; k < count; ++k)
     if (corners[k] < 0 || corners[k] >= num_vertices)
       ThrowError(ErrorCode::kInvalidInput,
-                 path + ": " + polygon + " has vertex index " + std::to_string(corners[k]) +
+                 path + ": " + polygon() + " has vertex index " + std::to_string(corners[k]) +
                      " out of range [0, " + std::to_string(num_vertices) + ")");
   for (int k = 1; k + 1 < count; ++k)
     mesh->faces.emplace_back(int(corners[0]), int(corners[k]), int(corners[k + 1]));

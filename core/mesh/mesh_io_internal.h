@@ -26,8 +26,8 @@ void WriteFileBytes(const std::string& path, const std::string& bytes);
 void SetTileLocalVertices(const std::string& path, const std::vector<double>& xyz,
                           TriangleMesh* mesh);
 // Appends triangles of polygon `corners` (fan around corners[0]) after checking each
-// index in [0, num_vertices). `polygon` names the polygon in error messages.
-void AddPolygon(const std::string& path, const std::string& polygon, const long long* corners,
-                int count, long long num_vertices, TriangleMesh* mesh);
+// index in [0, num_vertices). Errors name the polygon as "<kind> <number>".
+void AddPolygon(const std::string& path, const char* kind, size_t number,
+                const long long* corners, int count, long long num_vertices, TriangleMesh* mesh);
 
 }  // namespace satmesh::mesh_io_internal

@@ -55,7 +55,7 @@ TriangleMesh ReadObj(const std::string& path) {
     pos = eol + 1;
     ++line_number;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    const std::string where = "line " + std::to_string(line_number);
+    const auto where = [&] { return "line " + std::to_string(line_number); };
     const std::string_view keyword = NextToken(&line);
     if (keyword == "#" && line.substr(0, 5) == " crs ") {
       mesh.crs = std::string(line.substr(5));
@@ -63,7 +63,7 @@ TriangleMesh ReadObj(const std::string& path) {
       for (int k = 0; k < 3; ++k) {
         double value;
         if (!ParseNumber(NextToken(&line), &value))
-          ThrowError(ErrorCode::kInvalidInput, path + ": bad vertex coordinate on " + where);
+          ThrowError(ErrorCode::kInvalidInput, path + ": bad vertex coordinate on " + where());
         xyz.push_back(value);
       }
     } else if (keyword == "f") {
@@ -73,7 +73,7 @@ TriangleMesh ReadObj(const std::string& path) {
         long long index = 0;
         if (!ParseNumber(token.substr(0, token.find('/')), &index) || index == 0)
           ThrowError(ErrorCode::kInvalidInput,
-                     path + ": bad face index '" + std::string(token) + "' on " + where);
+                     path + ": bad face index '" + std::string(token) + "' on " + where());
         all_corners.push_back(index > 0 ? index - 1 : num_vertices + index);  // 0-based
       }
       polygons.push_back({line_number, first, all_corners.size() - first});
@@ -83,8 +83,8 @@ TriangleMesh ReadObj(const std::string& path) {
   const long long num_vertices = (long long)mesh.vertices.size();
   mesh.faces.reserve(polygons.size());
   for (const Polygon& p : polygons)
-    AddPolygon(path, "face on line " + std::to_string(p.line), all_corners.data() + p.first,
-               int(p.count), num_vertices, &mesh);
+    AddPolygon(path, "face on line", p.line, all_corners.data() + p.first, int(p.count),
+               num_vertices, &mesh);
   return mesh;
 }
 

@@ -225,7 +225,7 @@ TriangleMesh ReadPly(const std::string& path) {
     }
     if (is_vertex) {
       if (found != 3) Fail(path, "PLY vertex element lacks scalar x, y, z properties");
-      if (element.count > bytes.size())
+      if (element.count > bytes.size() / 3)  // every row takes at least 3 bytes
         Fail(path, "PLY header declares " + std::to_string(element.count) +
                        " vertices, more than the file can hold (truncated?)");
       num_vertices = (long long)element.count;
@@ -233,7 +233,7 @@ TriangleMesh ReadPly(const std::string& path) {
     }
     if (element.name == "face") {
       if (num_vertices < 0) Fail(path, "PLY face element before the vertex element");
-      mesh.faces.reserve(std::min(element.count, bytes.size()));
+      mesh.faces.reserve(std::min(element.count, bytes.size() / 8));  // bound by file size
     }
     for (size_t row = 0; row < element.count; ++row) {
       for (size_t p = 0; p < element.properties.size(); ++p) {
@@ -262,7 +262,7 @@ TriangleMesh ReadPly(const std::string& path) {
           corners[k] = keep ? (long long)value : 0;
         }
         if (keep)
-          AddPolygon(path, "face " + std::to_string(row), corners.data(), count, num_vertices, &mesh);
+          AddPolygon(path, "face", row, corners.data(), count, num_vertices, &mesh);
       }
     }
   }
