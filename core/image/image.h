@@ -29,8 +29,10 @@ bool SampleBilinearWithGradient(const ImageF& image, double x, double y, float* 
 // Central-difference gradients (per pixel unit), same size as the input.
 void ComputeGradients(const ImageF& image, ImageF* d_dx, ImageF* d_dy);
 
-// Gaussian pyramid: level 0 is the input, level l has size ceil(size / 2^l); level l's
+// Gaussian pyramid of `levels` images (levels >= 1, else Error{kInvalidArgument}):
+// level 0 is the input, level l has size ceil(size / 2^l); level l's
 // pixel grid is level 0's scaled by 1/2^l (corner-origin), matching RpcModel::AtLevel.
+// Each step: Gaussian blur (sigma 1 px), then 2x2 box averaging (odd sizes edge-padded).
 std::vector<ImageF> GaussianPyramid(const ImageF& image, int levels);
 
 struct RadiometryOptions {
