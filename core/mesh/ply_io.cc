@@ -233,6 +233,9 @@ TriangleMesh ReadPly(const std::string& path) {
     }
     if (element.name == "face") {
       if (num_vertices < 0) Fail(path, "PLY face element before the vertex element");
+      if (std::none_of(element.properties.begin(), element.properties.end(),
+                       [&](const PlyProperty& p) { return IsFaceList(element.name, p); }))
+        Fail(path, "PLY face element has no 'vertex_indices' or 'vertex_index' list");
       mesh.faces.reserve(std::min(element.count, bytes.size() / 8));  // bound by file size
     }
     for (size_t row = 0; row < element.count; ++row) {

@@ -234,6 +234,14 @@ TEST_F(MalformedPly, IndexOutOfRangeRejected) {
   EXPECT_TRUE(Contains(msg, "face 3 has vertex index 25 out of range [0, 25)")) << msg;
 }
 
+TEST(ReadMesh, PlyFaceElementWithoutIndexListRejected) {
+  const std::string path = TempPath("noindices.ply");
+  Spit(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+             "property float z\nelement face 1\nproperty list uchar int corners\n"
+             "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_TRUE(Contains(ReadError(path), "no 'vertex_indices'"));
+}
+
 TEST(ReadMesh, MissingFileAndUnknownExtension) {
   ReadError("/nonexistent/mesh.ply", ErrorCode::kNotFound);
   ReadError(TempPath("mesh.stl"), ErrorCode::kInvalidArgument);
