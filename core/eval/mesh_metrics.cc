@@ -1,0 +1,126 @@
+#include "core/eval/mesh_metrics.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "core/common/error.h"
+
+namespace satmesh {
+namespace {
+
+bool InCrop(const Eigen::Vector3d& p, const Mesh3dOptions& o) {
+  if (!(o.crop_xmin < o.crop_xmax)) return true;
+  return p.x() >= o.crop_xmin && p.x() <= o.crop_xmax && p.y() >= o.crop_ymin &&
+         p.y() <= o.crop_ymax;
+}
+
+// Samples in the crop, and which of them are facade samples.
+SurfaceSamples CroppedSamples(const TriangleMesh& mesh, const Mesh3dOptions& o,
+                              std::vector<uint8_t>& is_facade) {
+  SurfaceSamples s = SampleSurface(mesh, o.sampling);
+  SurfaceSamples kept;
+  is_facade.clear();
+  for (size_t k = 0; k < s.points.size(); ++k) {
+    if (!InCrop(s.points[k], o)) continue;
+    kept.points.push_back(s.points[k]);
+    kept.normals.push_back(s.normals[k]);
+    is_facade.push_back(IsFacadeNormal(s.normals[k], o.facade_max_abs_nz) ? 1 : 0);
+  }
+  return kept;
+}
+
+// Fraction of distances below each threshold, over the selected samples.
+std::vector<double> FractionsWithin(const std::vector<float>& d, const std::vector<uint8_t>& select,
+                                    const std::vector<double>& thresholds, size_t& count) {
+  std::vector<double> f(thresholds.size(), 0.0);
+  count = 0;
+  for (size_t k = 0; k < d.size(); ++k) {
+    if (!select.empty() && !select[k]) continue;
+    ++count;
+    for (size_t t = 0; t < thresholds.size(); ++t)
+      if (d[k] < thresholds[t]) f[t] += 1;
+  }
+  if (count > 0)
+    for (double& v : f) v /= double(count);
+  return f;
+}
+
+Mesh3dScores Scores(const std::vector<float>& d_result, const std::vector<uint8_t>& sel_result,
+                    const std::vector<float>& d_truth, const std::vector<uint8_t>& sel_truth,
+                    const std::vector<double>& thresholds) {
+  Mesh3dScores s;
+  s.thresholds_m = thresholds;
+  s.accuracy = FractionsWithin(d_result, sel_result, thresholds, s.num_result_samples);
+  s.completeness = FractionsWithin(d_truth, sel_truth, thresholds, s.num_truth_samples);
+  for (size_t t = 0; t < thresholds.size(); ++t) {
+    const double p = s.accuracy[t], r = s.completeness[t];
+    s.fscore.push_back(p + r > 0 ? 2 * p * r / (p + r) : 0.0);
+  }
+  return s;
+}
+
+}  // namespace
+
+std::string SampleOptions::Check() const {
+  if (!(samples_per_m2 > 0 && samples_per_m2 <= 1e4))
+    return "samples_per_m2 must be in (0, 1e4], got " + std::to_string(samples_per_m2);
+  return "";
+}
+
+std::string Mesh3dOptions::Check() const {
+  if (auto m = sampling.Check(); !m.empty()) return "sampling: " + m;
+  if (thresholds_m.empty()) return "thresholds_m must not be empty";
+  for (double t : thresholds_m)
+    if (!(t > 0)) return "thresholds_m must be > 0, got " + std::to_string(t);
+  if (!(facade_max_abs_nz > 0 && facade_max_abs_nz <= 1))
+    return "facade_max_abs_nz must be in (0, 1], got " + std::to_string(facade_max_abs_nz);
+  return "";
+}
+
+SurfaceSamples SampleSurface(const TriangleMesh& mesh, const SampleOptions& options) {
+  const std::string msg = options.Check();
+  SATMESH_CHECK(msg.empty(), ErrorCode::kInvalidArgument, "SampleOptions: " + msg);
+  ValidateMesh(mesh, "SampleSurface mesh");
+  std::mt19937 rng(options.seed);
+  std::uniform_real_distribution<float> uni(0.f, 1.f);
+  SurfaceSamples s;
+  for (const auto& f : mesh.faces) {
+    const Eigen::Vector3f &a = mesh.vertices[f[0]], &b = mesh.vertices[f[1]],
+                          &c = mesh.vertices[f[2]];
+    const Eigen::Vector3f cross = (b - a).cross(c - a);
+    const double area = 0.5 * double(cross.norm());
+    const int n = int(std::floor(area * options.samples_per_m2 + uni(rng)));
+    if (n <= 0 || !(area > 0)) continue;
+    const Eigen::Vector3f normal = cross.normalized();
+    for (int k = 0; k < n; ++k) {
+      const float r1 = std::sqrt(uni(rng)), r2 = uni(rng);  // uniform on the triangle
+      const Eigen::Vector3f p = (1 - r1) * a + r1 * (1 - r2) * b + r1 * r2 * c;
+      s.points.push_back(mesh.origin + p.cast<double>());
+      s.normals.push_back(normal);
+    }
+  }
+  return s;
+}
+
+Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& truth,
+                             const Mesh3dOptions& options) {
+  const std::string msg = options.Check();
+  SATMESH_CHECK(msg.empty(), ErrorCode::kInvalidArgument, "Mesh3dOptions: " + msg);
+  std::vector<uint8_t> facade_result, facade_truth;
+  const SurfaceSamples s_result = CroppedSamples(result, options, facade_result);
+  const SurfaceSamples s_truth = CroppedSamples(truth, options, facade_truth);
+  const double max_d = *std::max_element(options.thresholds_m.begin(), options.thresholds_m.end());
+  const std::vector<float> d_result =
+      SurfaceDistance(truth, options.backend).Distances(s_result.points, max_d);
+  const std::vector<float> d_truth =
+      SurfaceDistance(result, options.backend).Distances(s_truth.points, max_d);
+  Mesh3dMetrics m;
+  m.all = Scores(d_result, {}, d_truth, {}, options.thresholds_m);
+  m.facade = Scores(d_result, facade_result, d_truth, facade_truth, options.thresholds_m);
+  return m;
+}
+
+}  // namespace satmesh

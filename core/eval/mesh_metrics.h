@@ -1,0 +1,64 @@
+#pragma once
+// 3D metrics of a result mesh against a ground-truth mesh (needs 3D truth, i.e.
+// synthetic scenes): surfaces sampled uniformly by area; accuracy = fraction of result
+// samples within t of the truth surface, completeness = fraction of truth samples within
+// t of the result surface, F-score = harmonic mean; all samples and facades only.
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/eval/surface_distance.h"
+#include "core/mesh/mesh.h"
+
+namespace satmesh {
+
+struct SurfaceSamples {
+  std::vector<Eigen::Vector3d> points;   // absolute, in the mesh's CRS
+  std::vector<Eigen::Vector3f> normals;  // unit normal of the sampled face
+};
+
+struct SampleOptions {
+  double samples_per_m2 = 4.0;  // expected samples per square metre, in (0, 1e4]
+  uint32_t seed = 1;            // random generator seed (sampling is deterministic)
+  std::string Check() const;
+};
+
+// Uniform random samples by area: each face gets floor(area * density + u) samples,
+// u ~ U[0, 1), at uniform barycentric positions.
+SurfaceSamples SampleSurface(const TriangleMesh& mesh, const SampleOptions& options = {});
+
+// A facade sample has a near-horizontal normal: |n_z| < max_abs_nz.
+inline bool IsFacadeNormal(const Eigen::Vector3f& n, double max_abs_nz) {
+  return std::abs(double(n.z())) < max_abs_nz;
+}
+
+struct Mesh3dOptions {
+  SampleOptions sampling;                         // on both surfaces
+  std::vector<double> thresholds_m{0.3, 0.5, 1.0};  // distance thresholds, each > 0
+  double facade_max_abs_nz = 0.3;                 // facade: |n_z| below, in (0, 1]
+  // XY crop (absolute, mesh CRS): samples outside are not counted; unused if xmin >= xmax.
+  double crop_xmin = 0, crop_ymin = 0, crop_xmax = 0, crop_ymax = 0;
+  DistanceBackend backend = DistanceBackend::kEmbree;  // point-to-surface distances
+  std::string Check() const;
+};
+
+struct Mesh3dScores {
+  std::vector<double> thresholds_m;
+  std::vector<double> accuracy;      // per threshold, fraction in [0, 1]
+  std::vector<double> completeness;  // per threshold
+  std::vector<double> fscore;        // per threshold, 2PR/(P+R) (0 if both 0)
+  size_t num_result_samples = 0, num_truth_samples = 0;
+};
+
+struct Mesh3dMetrics {
+  Mesh3dScores all;     // every sample
+  Mesh3dScores facade;  // facade samples only (on either side; distances to the whole surface)
+};
+
+// Both meshes in the same CRS (origins may differ). Throws Error on invalid options.
+Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& truth,
+                             const Mesh3dOptions& options = {});
+
+}  // namespace satmesh

@@ -1,0 +1,83 @@
+#include "core/eval/scene_eval.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include "core/common/error.h"
+#include "core/common/gdal_init.h"
+#include "core/dsm/dsm.h"
+#include "core/mesh/mesh_io.h"
+
+namespace satmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A tiny scene directory by the layout contract: 30x30 cells at 0.5 m, ground at 100 m
+// and a 10x10-cell block 8 m high; the initial DSM has its roof 0.8 m too high and holes.
+fs::path WriteTinyScene(const std::string& name) {
+  EnsureGdalInitialized();
+  const fs::path dir = fs::temp_directory_path() / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir / "truth");
+  fs::create_directories(dir / "initial");
+  Dsm truth;
+  truth.width = truth.height = 30;
+  truth.geo_transform = {500000.0, 0.5, 0, 4000015.0, 0, -0.5};
+  truth.z.assign(900, 100.f);
+  Dsm mask = truth, initial = truth;
+  mask.z.assign(900, 0.f);
+  for (int j = 10; j < 20; ++j)
+    for (int i = 10; i < 20; ++i) {
+      truth.at(i, j) = initial.at(i, j) = 108.f;
+      initial.at(i, j) += 0.8f;
+      if (i > 10 && i < 19 && j > 10 && j < 19) mask.at(i, j) = 1.f;  // edge band removed
+    }
+  for (int i = 0; i < 30; ++i) initial.at(i, 3) = std::numeric_limits<float>::quiet_NaN();
+  WriteDsm((dir / "truth" / "dsm.tif").string(), truth);
+  WriteDsm((dir / "truth" / "roof_mask.tif").string(), mask);
+  WriteDsm((dir / "initial" / "dsm.tif").string(), initial);
+  WriteMesh((dir / "truth" / "mesh.ply").string(), MeshFromDsm(truth));
+  return dir;
+}
+
+TEST(EvaluateScene, TruthAgainstItselfAndInitial) {
+  const fs::path dir = WriteTinyScene("satmesh_eval_tiny_scene");
+  const SceneEvaluation e = EvaluateScene(dir.string(), (dir / "truth" / "mesh.ply").string());
+  EXPECT_EQ(e.grid_width, 30);
+  EXPECT_EQ(e.num_mask_cells, 64u);
+  // Result = truth: near perfect in 2.5D and 3D.
+  EXPECT_GT(e.result.dsm.mask_raw.completeness_05m, 0.99);
+  EXPECT_LT(e.result.dsm.all_raw.nmad_m, 1e-3);
+  EXPECT_GT(e.result.mesh3d.all.accuracy[0], 0.999);
+  EXPECT_GT(e.result.mesh3d.all.completeness[0], 0.999);
+  // Initial: roofs 0.8 m high (out at 0.5 m, in at 1 m), one row of holes.
+  EXPECT_DOUBLE_EQ(e.initial.dsm.mask_raw.completeness_05m, 0.0);
+  EXPECT_DOUBLE_EQ(e.initial.dsm.mask_raw.completeness_1m, 1.0);
+  EXPECT_NEAR(e.initial.dsm.mask_raw.mae_m, 0.8, 1e-5);
+  EXPECT_NEAR(e.initial.dsm.all_raw.completeness, 870.0 / 900.0, 1e-9);
+  EXPECT_LT(e.initial.mesh3d.all.accuracy[1], e.result.mesh3d.all.accuracy[1]);
+  fs::remove_all(dir);
+}
+
+TEST(EvaluateScene, MissingFilesAreNamed) {
+  const fs::path dir = WriteTinyScene("satmesh_eval_missing");
+  try {
+    EvaluateScene(dir.string(), (dir / "nope.ply").string());
+    FAIL() << "expected an Error";
+  } catch (const Error& err) {
+    EXPECT_EQ(err.code(), ErrorCode::kNotFound);
+    EXPECT_NE(std::string(err.what()).find("nope.ply"), std::string::npos);
+  }
+  fs::remove(dir / "initial" / "dsm.tif");
+  EXPECT_THROW(EvaluateScene(dir.string(), (dir / "truth").string()), Error);
+  fs::remove_all(dir);
+}
+
+TEST(SceneEvalOptions, DefaultsAreValid) { EXPECT_EQ(SceneEvalOptions{}.Check(), ""); }
+
+}  // namespace
+}  // namespace satmesh
