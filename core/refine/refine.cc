@@ -1,5 +1,6 @@
 #include "core/refine/refine.h"
 
+#include <Eigen/LU>
 #include <spdlog/spdlog.h>
 
 #include <chrono>

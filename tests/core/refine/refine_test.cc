@@ -1,0 +1,101 @@
+#include "core/refine/refine.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/core/refine/plane_scene.h"
+
+namespace satmesh {
+namespace {
+
+// Mean and max |z - plane| over vertices in the interior square |x|,|y| < half.
+std::pair<double, double> PlaneError(const TriangleMesh& mesh, const testing::Plane& plane,
+                                     double half) {
+  double sum = 0, max = 0;
+  int n = 0;
+  for (const auto& v : mesh.vertices) {
+    if (std::abs(v.x()) > half || std::abs(v.y()) > half) continue;
+    const double e = std::abs(v.z() - plane.Z(v.x(), v.y()));
+    sum += e;
+    max = std::max(max, e);
+    ++n;
+  }
+  return {n ? sum / n : 1e9, max};
+}
+
+RefineOptions SmallOptions() {
+  RefineOptions o;
+  o.levels = 2;
+  o.iterations_per_level = 15;
+  return o;
+}
+
+TEST(RefineOptions, DefaultsAreValid) { EXPECT_EQ(RefineOptions().Check(), ""); }
+
+TEST(RefineOptions, InvalidValuesAreNamed) {
+  RefineOptions o;
+  o.zncc_window_radius = 0;
+  EXPECT_NE(o.Check().find("zncc_window_radius"), std::string::npos);
+  o = RefineOptions();
+  o.pairs.max_angle_deg = 2;
+  EXPECT_NE(o.Check().find("pairs.max_angle_deg"), std::string::npos);
+  o = RefineOptions();
+  o.step = -1;
+  EXPECT_NE(o.Check().find("step"), std::string::npos);
+}
+
+TEST(Refine, GroundTruthStaysPut) {
+  const testing::Plane plane;
+  const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                             testing::PlaneMesh(plane, 40, 1.0, 0.0));
+  const RefineResult result = Refine(input, SmallOptions());
+  const auto [mean, max] = PlaneError(result.mesh, plane, 30);
+  EXPECT_LT(mean, 0.05);  // 0.1 GSD
+  EXPECT_LT(max, 0.25);
+  EXPECT_EQ(result.levels.size(), 3u);
+}
+
+TEST(Refine, TiltedPlaneStartedMetresOffConverges) {
+  const testing::Plane plane;
+  const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                             testing::PlaneMesh(plane, 40, 1.0, 3.0));
+  const RefineResult result = Refine(input, SmallOptions());
+  const auto [mean, max] = PlaneError(result.mesh, plane, 30);
+  EXPECT_LT(mean, 0.1);
+  EXPECT_LT(max, 0.5);
+  // Mean ZNCC rises at every level.
+  for (const auto& level : result.levels)
+    EXPECT_GT(level.mean_zncc.back(), level.mean_zncc.front()) << "level " << level.level;
+}
+
+TEST(Refine, CancelledRunSaysSo) {
+  const testing::Plane plane;
+  const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                             testing::PlaneMesh(plane, 40, 2.0, 1.0), 120);
+  Progress progress;
+  progress.is_cancelled = [] { return true; };
+  try {
+    Refine(input, SmallOptions(), progress);
+    FAIL() << "expected cancellation";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kCancelled);
+  }
+}
+
+TEST(Refine, FailsWithReasonWithoutStereoPair) {
+  const testing::Plane plane;
+  // Two views 40 degrees apart: no pair in [5, 13] degrees.
+  const auto input = testing::MakePlaneInput(plane, {{20, 0}, {20, 180}},
+                                             testing::PlaneMesh(plane, 40, 2.0, 1.0), 120);
+  try {
+    Refine(input, SmallOptions());
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidInput);
+    EXPECT_NE(std::string(e.what()).find("no stereo pair"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace satmesh
