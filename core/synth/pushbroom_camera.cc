@@ -84,7 +84,7 @@ std::optional<Eigen::Vector3d> PushbroomCamera::LocalizeAtHeight(const Eigen::Ve
     if (!(slope < 0)) return std::nullopt;  // not descending towards the Earth
     const double f = g.z() - h;
     s -= f / slope;
-    if (std::abs(f) < 1e-9) return GeoFromEcef(o + s * d);
+    if (std::abs(f) < 1e-6) return GeoFromEcef(o + s * d);  // ECEF ulp is ~1e-9 m
   }
   return std::nullopt;
 }
