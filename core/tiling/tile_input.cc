@@ -1,0 +1,125 @@
+#include "core/tiling/tile_input.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/common/error.h"
+#include "core/geo/crs.h"
+#include "core/image/image_io.h"
+#include "core/rpc/rpc_io.h"
+
+namespace satmesh {
+namespace {
+
+double Median(std::vector<float> values) {
+  if (values.empty()) return 0;
+  auto mid = values.begin() + values.size() / 2;
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
+// The pixel window of `rpc` that sees the box [x0,x1]x[y0,y1]x[h0,h1] (geodetic corners).
+PixelWindow WindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vector3d>& box_geo,
+                         const RasterInfo& info, int margin_px) {
+  double cmin = 1e300, cmax = -1e300, rmin = 1e300, rmax = -1e300;
+  for (const auto& p : box_geo) {
+    const Eigen::Vector2d px = rpc.PixelFromGeo(p);
+    cmin = std::min(cmin, px.x()), cmax = std::max(cmax, px.x());
+    rmin = std::min(rmin, px.y()), rmax = std::max(rmax, px.y());
+  }
+  PixelWindow w;
+  w.col0 = std::max(0, int(std::floor(cmin)) - margin_px);
+  w.row0 = std::max(0, int(std::floor(rmin)) - margin_px);
+  const int c1 = std::min(info.width, int(std::ceil(cmax)) + margin_px);
+  const int r1 = std::min(info.height, int(std::ceil(rmax)) + margin_px);
+  w.width = std::max(0, c1 - w.col0);
+  w.height = std::max(0, r1 - w.row0);
+  return w;
+}
+
+}  // namespace
+
+Dsm DownsampleDsm(const Dsm& dsm, int factor) {
+  if (factor <= 1) return dsm;
+  Dsm out;
+  out.width = (dsm.width + factor - 1) / factor;
+  out.height = (dsm.height + factor - 1) / factor;
+  out.crs_wkt = dsm.crs_wkt;
+  out.geo_transform = dsm.geo_transform;
+  out.geo_transform[1] *= factor;
+  out.geo_transform[5] *= factor;
+  out.z.assign(size_t(out.width) * out.height, std::nanf(""));
+  for (int j = 0; j < out.height; ++j) {
+    for (int i = 0; i < out.width; ++i) {
+      double sum = 0;
+      int n = 0;
+      for (int jj = j * factor; jj < std::min(dsm.height, (j + 1) * factor); ++jj)
+        for (int ii = i * factor; ii < std::min(dsm.width, (i + 1) * factor); ++ii)
+          if (std::isfinite(dsm.at(ii, jj))) sum += dsm.at(ii, jj), ++n;
+      if (n > 0) out.at(i, j) = float(sum / n);
+    }
+  }
+  return out;
+}
+
+TileInput PrepareTileInput(const JobSpec& spec, const Dsm& dsm, double coarse_cell_m) {
+  TileInput tile;
+  tile.dsm_crs_wkt = dsm.crs_wkt;
+  std::vector<float> valid;
+  for (float z : dsm.z)
+    if (std::isfinite(z)) valid.push_back(z);
+  SATMESH_CHECK(!valid.empty(), ErrorCode::kInvalidInput,
+                "initial DSM '" + spec.initial_dsm + "' has no valid cell");
+  const auto [zmin_it, zmax_it] = std::minmax_element(valid.begin(), valid.end());
+  const double h_min = *zmin_it, h_max = *zmax_it, h_mid = Median(valid);
+
+  // Local frame at the DSM centre.
+  const CrsTransform geo_from_dsm(dsm.crs_wkt, kWgs84Geographic3D);
+  const double x0 = dsm.geo_transform[0], y0 = dsm.geo_transform[3];
+  const double x1 = x0 + dsm.width * dsm.geo_transform[1], y1 = y0 + dsm.height * dsm.geo_transform[5];
+  const Eigen::Vector3d center_geo = geo_from_dsm.Apply(Eigen::Vector3d(0.5 * (x0 + x1), 0.5 * (y0 + y1), h_mid));
+  tile.refine.frame = LocalFrame(center_geo);
+  tile.refine.min_z = h_min - h_mid;
+  tile.refine.max_z = h_max - h_mid;
+
+  // The tile's 3D box, geodetic, for the image windows.
+  std::vector<Eigen::Vector3d> box_geo;
+  for (double fx : {0.0, 0.5, 1.0})
+    for (double fy : {0.0, 0.5, 1.0})
+      for (double h : {h_min - 2, h_max + 2})
+        box_geo.push_back(geo_from_dsm.Apply(Eigen::Vector3d(x0 + fx * (x1 - x0), y0 + fy * (y1 - y0), h)));
+
+  const int margin_px = 8 + 4 * (1 << spec.refine.levels);
+  for (const auto& image : spec.images) {
+    const RpcModel rpc = ReadRpc(image.path).WithBias(image.bias_col_row_px);
+    const RasterInfo info = ReadRasterInfo(image.path);
+    const PixelWindow window = WindowSeeing(rpc, box_geo, info, margin_px);
+    if (window.width < 16 || window.height < 16) {
+      spdlog::warn("image '{}' does not see the area; dropped", image.path);
+      continue;
+    }
+    RefineView view;
+    view.name = image.path;
+    view.image = ReadImageWindow(image.path, 1, window);
+    view.rpc = rpc.Cropped(Eigen::Vector2d(window.col0, window.row0));
+    tile.refine.views.push_back(std::move(view));
+    tile.view_names.push_back(image.path);
+  }
+
+  // Initial mesh: the DSM at the coarse cell size, into the local frame.
+  const int factor = std::max(1, int(std::floor(coarse_cell_m / std::abs(dsm.geo_transform[1]))));
+  TriangleMesh mesh = MeshFromDsm(DownsampleDsm(dsm, factor));
+  std::vector<Eigen::Vector3d> points(mesh.vertices.size());
+  for (size_t i = 0; i < points.size(); ++i) points[i] = mesh.AbsoluteVertex(i);
+  geo_from_dsm.Apply(&points);
+  mesh.origin.setZero();
+  mesh.crs.clear();
+  for (size_t i = 0; i < points.size(); ++i)
+    mesh.vertices[i] = tile.refine.frame.LocalFromGeo(points[i]).cast<float>();
+  tile.refine.initial_mesh = std::move(mesh);
+  return tile;
+}
+
+}  // namespace satmesh
