@@ -56,6 +56,54 @@ std::vector<size_t> EvaluatedCells(const Dsm& truth, const std::vector<uint8_t>&
   return cells;
 }
 
+std::vector<size_t> Subsample(const std::vector<size_t>& cells, size_t max_count) {
+  if (cells.size() <= max_count) return cells;
+  std::vector<size_t> sub;
+  const double step = double(cells.size()) / double(max_count);
+  for (double k = 0; size_t(k) < cells.size(); k += step) sub.push_back(cells[size_t(k)]);
+  return sub;
+}
+
+struct Candidate {
+  int si = 0, sj = 0;
+  double score = std::numeric_limits<double>::infinity();  // inf: too little overlap
+  double dz = 0;
+};
+
+// Per candidate shift: dz = median residual, score = mean(min(|r - dz|, clip)).
+void ScoreCandidates(const Dsm& result, const Dsm& truth, const std::vector<size_t>& cells,
+                     double clip_m, std::vector<Candidate>& candidates) {
+#pragma omp parallel for schedule(dynamic)
+  for (long k = 0; k < long(candidates.size()); ++k) {
+    Candidate& c = candidates[k];
+    std::vector<float> r;
+    ShiftedResiduals(result, truth, cells, c.si, c.sj, r);
+    std::vector<double> valid;
+    valid.reserve(r.size());
+    for (float v : r)
+      if (std::isfinite(v)) valid.push_back(v);
+    // Require a quarter of the cells to overlap so a far shift cannot win on a sliver.
+    if (valid.empty() || valid.size() * 4 < cells.size()) continue;
+    c.dz = Quantile(valid, 0.5);
+    double score = 0;
+    for (double v : valid) score += std::min(std::abs(v - c.dz), clip_m);
+    c.score = score / valid.size();
+  }
+}
+
+// Lowest score; ties go to the smaller shift. nullptr if none overlaps enough.
+const Candidate* Best(const std::vector<Candidate>& candidates) {
+  const Candidate* best = nullptr;
+  for (const Candidate& c : candidates) {
+    if (!std::isfinite(c.score)) continue;
+    const int n = c.si * c.si + c.sj * c.sj;
+    if (!best || c.score < best->score - 1e-12 ||
+        (c.score <= best->score + 1e-12 && n < best->si * best->si + best->sj * best->sj))
+      best = &c;
+  }
+  return best;
+}
+
 }  // namespace
 
 std::string DsmMetricsOptions::Check() const {
@@ -132,54 +180,32 @@ Alignment AlignDsm(const Dsm& result, const Dsm& truth, const std::vector<uint8_
   const std::string msg = options.Check();
   SATMESH_CHECK(msg.empty(), ErrorCode::kInvalidArgument, "AlignOptions: " + msg);
   CheckSameGrid(result, truth, mask);
-  std::vector<size_t> cells = EvaluatedCells(truth, mask);
-  if (cells.size() > options.max_cells) {  // regular subsample
-    std::vector<size_t> sub;
-    const double step = double(cells.size()) / options.max_cells;
-    for (double k = 0; size_t(k) < cells.size(); k += step) sub.push_back(cells[size_t(k)]);
-    cells.swap(sub);
-  }
+  const std::vector<size_t> all_cells = EvaluatedCells(truth, mask);
+  const std::vector<size_t> cells = Subsample(all_cells, options.max_cells);
   const int max_i = int(std::floor(options.max_shift_m / std::abs(truth.geo_transform[1]) + 1e-9));
   const int max_j = int(std::floor(options.max_shift_m / std::abs(truth.geo_transform[5]) + 1e-9));
-  const int ni = 2 * max_i + 1, nj = 2 * max_j + 1;
-  std::vector<double> scores(size_t(ni) * nj, std::numeric_limits<double>::infinity());
-  std::vector<double> dzs(scores.size(), 0.0);
-#pragma omp parallel for schedule(dynamic)
-  for (int k = 0; k < ni * nj; ++k) {
-    const int si = k % ni - max_i, sj = k / ni - max_j;
-    std::vector<float> r;
-    ShiftedResiduals(result, truth, cells, si, sj, r);
-    std::vector<double> valid;
-    valid.reserve(r.size());
-    for (float v : r)
-      if (std::isfinite(v)) valid.push_back(v);
-    // Require half the cells to overlap so a far shift cannot win on a sliver.
-    if (valid.empty() || valid.size() * 2 < cells.size() / 2) continue;
-    const double dz = Quantile(valid, 0.5);
-    double score = 0;
-    for (double v : valid) score += std::min(std::abs(v - dz), options.robust_clip_m);
-    scores[k] = score / valid.size();
-    dzs[k] = dz;
-  }
-  // Lowest score; ties go to the smaller shift.
-  int best = -1;
-  for (int k = 0; k < ni * nj; ++k) {
-    if (!std::isfinite(scores[k])) continue;
-    auto norm = [&](int q) {
-      const int a = q % ni - max_i, b = q / ni - max_j;
-      return a * a + b * b;
-    };
-    if (best < 0 || scores[k] < scores[best] - 1e-12 ||
-        (scores[k] <= scores[best] + 1e-12 && norm(k) < norm(best)))
-      best = k;
-  }
+  // Coarse: every `step`-th shift on a quarter of the cells; fine: +-step around the best.
+  const int step = std::max(1, std::max(max_i, max_j) / 4);
+  std::vector<Candidate> coarse;
+  for (int sj = -(max_j / step) * step; sj <= max_j; sj += step)
+    for (int si = -(max_i / step) * step; si <= max_i; si += step) coarse.push_back({si, sj});
+  ScoreCandidates(result, truth, Subsample(cells, std::max<size_t>(100, cells.size() / 4)),
+                  options.robust_clip_m, coarse);
+  const Candidate* best = Best(coarse);
+  if (!best) return {};
+  std::vector<Candidate> fine;
+  for (int sj = best->sj - step; sj <= best->sj + step; ++sj)
+    for (int si = best->si - step; si <= best->si + step; ++si)
+      if (std::abs(si) <= max_i && std::abs(sj) <= max_j) fine.push_back({si, sj});
+  ScoreCandidates(result, truth, cells, options.robust_clip_m, fine);
+  best = Best(fine);
+  if (!best) return {};
   Alignment a;
-  if (best < 0) return a;
-  a.shift_i = best % ni - max_i;
-  a.shift_j = best / ni - max_j;
+  a.shift_i = best->si;
+  a.shift_j = best->sj;
   a.dx_m = a.shift_i * truth.geo_transform[1];
   a.dy_m = a.shift_j * truth.geo_transform[5];
-  a.dz_m = -dzs[best];
+  a.dz_m = -best->dz;
   return a;
 }
 

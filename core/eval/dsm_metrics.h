@@ -49,8 +49,10 @@ struct AlignOptions {
   std::string Check() const;
 };
 
-// Grid search over integer cell shifts within +-max_shift_m; for each, dz = median of
-// the residuals and the score = mean(min(|r - dz|, clip)); the lowest score wins.
+// Search over integer cell shifts within +-max_shift_m, coarse to fine (every s-th shift,
+// s = max shift in cells / 4, on a quarter of the cells; then +-s around the best on all
+// used cells). Per shift, dz = median of the residuals and the score =
+// mean(min(|r - dz|, clip)); the lowest score wins (ties: the smaller shift).
 // mask: empty = all cells, else one byte per cell (non-zero = use). Grids must match.
 Alignment AlignDsm(const Dsm& result, const Dsm& truth, const std::vector<uint8_t>& mask,
                    const AlignOptions& options = {});

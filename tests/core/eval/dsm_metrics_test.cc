@@ -85,6 +85,22 @@ TEST(AlignDsm, RecoversKnownShiftAndOffset) {
   EXPECT_NEAR(e.all_aligned.completeness, 37.0 * 38.0 / 1600.0, 1e-9);
 }
 
+TEST(AlignDsm, CoarseToFineFindsOddShiftNearTheSearchLimit) {
+  const Dsm truth = MakeTruth();
+  Dsm result = truth;
+  for (int j = 0; j < 40; ++j)
+    for (int i = 0; i < 40; ++i) {
+      const int ti = i + 7, tj = j - 5;  // content moved by (-7, +5) cells, lowered 0.4 m
+      result.at(i, j) = (ti < 40 && tj >= 0) ? truth.at(ti, tj) - 0.4f : kNaN;
+    }
+  AlignOptions o;
+  o.max_shift_m = 4.0;  // 8 cells: coarse step 2
+  const Alignment a = AlignDsm(result, truth, {}, o);
+  EXPECT_EQ(a.shift_i, 7);
+  EXPECT_EQ(a.shift_j, -5);
+  EXPECT_NEAR(a.dz_m, 0.4, 1e-5);
+}
+
 TEST(EvaluateDsm, MaskSelectsCellsAndGridsMustMatch) {
   const Dsm truth = MakeTruth();
   Dsm result = truth;
