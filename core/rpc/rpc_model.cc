@@ -23,17 +23,16 @@ inline void Monomials(double l, double p, double h, Terms* m) {
   t[16] = p * h * h; t[17] = l * l * h; t[18] = p * p * h; t[19] = h * h * h;
 }
 
-// Derivatives of the monomials with respect to L, P and H.
-inline void MonomialDerivatives(double l, double p, double h, Terms* dl, Terms* dp, Terms* dh) {
-  Terms& a = *dl;
-  a = {0, 1, 0, 0, p, h, 0, 2 * l, 0, 0, p * h, 3 * l * l, p * p, h * h, 2 * l * p,
-       0, 0, 2 * l * h, 0, 0};
-  Terms& b = *dp;
-  b = {0, 0, 1, 0, l, 0, h, 0, 2 * p, 0, l * h, 0, 2 * l * p, 0, l * l,
-       3 * p * p, h * h, 0, 2 * p * h, 0};
-  Terms& c = *dh;
-  c = {0, 0, 0, 1, 0, l, p, 0, 0, 2 * h, l * p, 0, 0, 2 * l * h, 0,
-       0, 2 * p * h, l * l, p * p, 3 * h * h};
+// Gradient of one cubic w.r.t. (L, P, H), reusing the monomials m (lp = m[4], lh = m[5],
+// ph = m[6], ll = m[7], pp = m[8], hh = m[9]).
+inline void CubicGradient(const std::array<double, kTerms>& c, const Terms& m, double l, double p,
+                          double h, double g[3]) {
+  g[0] = c[1] + c[4] * p + c[5] * h + 2 * c[7] * l + c[10] * m[6] + 3 * c[11] * m[7] +
+         c[12] * m[8] + c[13] * m[9] + 2 * c[14] * m[4] + 2 * c[17] * m[5];
+  g[1] = c[2] + c[4] * l + c[6] * h + 2 * c[8] * p + c[10] * m[5] + 2 * c[12] * m[4] +
+         c[14] * m[7] + 3 * c[15] * m[8] + c[16] * m[9] + 2 * c[18] * m[6];
+  g[2] = c[3] + c[5] * l + c[6] * p + 2 * c[9] * h + c[10] * m[4] + 2 * c[13] * m[5] +
+         2 * c[16] * m[6] + c[17] * m[7] + c[18] * m[8] + 3 * c[19] * m[9];
 }
 
 inline double Dot(const std::array<double, kTerms>& c, const Terms& m) {
@@ -203,20 +202,20 @@ Eigen::Vector2d RpcModel::PixelFromGeo(const Eigen::Vector3d& lon_lat_h,
   const double l = (lon_lat_h.x() - c.long_off) / c.long_scale;
   const double p = (lon_lat_h.y() - c.lat_off) / c.lat_scale;
   const double h = (lon_lat_h.z() - c.height_off) / c.height_scale;
-  Terms m, dl, dp, dh;
+  Terms m;
   Monomials(l, p, h, &m);
-  MonomialDerivatives(l, p, h, &dl, &dp, &dh);
   const double inv_norm[3] = {1.0 / c.long_scale, 1.0 / c.lat_scale, 1.0 / c.height_scale};
-  const Terms* dm[3] = {&dl, &dp, &dh};
   // Quotient rule: d(n/d) = (n' d - n d') / d^2, chained through the normalisations.
   auto ratio = [&](const std::array<double, kTerms>& num, const std::array<double, kTerms>& den,
                    double out_scale, double* value, double* grad) {
     const double n = Dot(num, m), d = Dot(den, m);
+    double dn[3], dd[3];
+    CubicGradient(num, m, l, p, h, dn);
+    CubicGradient(den, m, l, p, h, dd);
     const double inv_d = 1.0 / d;
     *value = n / d;  // as in the plain overload, bit for bit
     for (int k = 0; k < 3; ++k) {
-      const double dn = Dot(num, *dm[k]), dd = Dot(den, *dm[k]);
-      grad[k] = (dn * d - n * dd) * inv_d * inv_d * inv_norm[k] * out_scale;
+      grad[k] = (dn[k] * d - n * dd[k]) * inv_d * inv_d * inv_norm[k] * out_scale;
     }
   };
   double samp_n, line_n, dsamp[3], dline[3];
