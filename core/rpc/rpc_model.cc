@@ -3,6 +3,8 @@
 #include <Eigen/LU>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
+#include <algorithm>
 #include <sstream>
 
 #include "core/common/error.h"
@@ -238,10 +240,15 @@ std::optional<Eigen::Vector2d> RpcModel::LocalizeLonLat(const Eigen::Vector2d& c
   constexpr double kMaxNormalised = 10.0;
   Eigen::Vector3d geo(c.long_off, c.lat_off, h);
   Eigen::Matrix<double, 2, 3> jacobian;
+  // The tolerance cannot be below what double resolves at the RPC's pixel magnitude.
+  const double resolution_px = 8 * std::numeric_limits<double>::epsilon() * std::abs(scale_) *
+                               (std::abs(c.samp_off) + std::abs(c.samp_scale) +
+                                std::abs(c.line_off) + std::abs(c.line_scale));
+  const double tolerance_px = std::max(options.tolerance_px, resolution_px);
   for (int it = 0; it <= options.max_iterations; ++it) {
     const Eigen::Vector2d residual = PixelFromGeo(geo, &jacobian) - col_row;
     if (!residual.allFinite()) return std::nullopt;
-    if (residual.norm() <= options.tolerance_px) return geo.head<2>();
+    if (residual.norm() <= tolerance_px) return geo.head<2>();
     if (it == options.max_iterations) break;
     const Eigen::Matrix2d j2 = jacobian.leftCols<2>();
     const double det = j2.determinant();
