@@ -3,6 +3,7 @@
 #include <cpl_string.h>
 #include <cpl_vsi.h>
 #include <gdal_priv.h>
+#include <ogr_spatialref.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -92,6 +93,18 @@ void RetryOnBoundary(const TriangleMesh& mesh, const RayScene& scene,
       best = std::max(best, z);
     }
     if (std::isfinite(best)) z_out[missed[m]] = float(mesh.origin.z() + best);
+  }
+}
+
+// Warns when both CRSs are known and differ (the caller must pass matching ones).
+void WarnIfCrsDiffers(const std::string& mesh_crs, const std::string& grid_crs) {
+  if (mesh_crs.empty() || grid_crs.empty() || mesh_crs == grid_crs) return;
+  EnsureGdalInitialized();
+  OGRSpatialReference a, b;
+  if (a.SetFromUserInput(mesh_crs.c_str()) != OGRERR_NONE ||
+      b.SetFromUserInput(grid_crs.c_str()) != OGRERR_NONE || !a.IsSame(&b)) {
+    spdlog::warn("DsmFromMesh: the mesh's CRS differs from the grid's; using the mesh's "
+                 "coordinates as if they were in the grid's CRS");
   }
 }
 
@@ -247,6 +260,7 @@ Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid) {
   out.crs_wkt = grid.crs_wkt;
   out.z.assign(size_t(out.width) * out.height, kNaN);
   if (mesh.faces.empty() || out.z.empty()) return out;
+  WarnIfCrsDiffers(mesh.crs, grid.crs_wkt);
 
   RayScene scene(mesh);  // validates indices and finiteness
   float top = -std::numeric_limits<float>::infinity();

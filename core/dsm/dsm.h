@@ -22,18 +22,27 @@ struct Dsm {
   double CellCenterY(int j) const { return geo_transform[3] + (j + 0.5) * geo_transform[5]; }
 };
 
-// Reads band 1 as float; the band's nodata value becomes NaN. Rotated grids are rejected.
+// Reads band 1 as float; the band's nodata value (and +-inf) becomes NaN. Throws
+// Error{kNotFound} for a missing file, Error{kInvalidInput} naming the file for an
+// unreadable one, one without geotransform, or a rotated/sheared grid.
 Dsm ReadDsm(const std::string& path);
-// Float32 GeoTIFF, NaN nodata, deflate-compressed.
+// Float32 GeoTIFF, NaN nodata, deflate-compressed (floating-point predictor), tiled.
 void WriteDsm(const std::string& path, const Dsm& dsm);
 
 // Grid triangulation of the valid cells (vertex at each cell centre, two triangles per
-// 2x2 block of valid cells; nodata holes stay open). Origin: the grid centre.
+// 2x2 block of valid cells along the diagonal of smaller height difference, one triangle
+// if exactly 3 are valid; nodata holes stay open). Faces are counter-clockwise seen from
+// above (normals +z). Valid cells in no triangle (isolated, or in 1-cell-wide lines)
+// make no vertex. Origin: the grid centre (x, y) and the middle of the height range,
+// rounded to metres; crs = dsm.crs_wkt.
 TriangleMesh MeshFromDsm(const Dsm& dsm);
 
 // Rasterises a mesh on `grid`'s geometry (size, transform, CRS; its z is ignored) by the
 // highest hit of a vertical ray through each cell centre (Embree); NaN where no hit.
-// mesh.origin + vertices must be in grid's CRS.
+// mesh.origin + vertices must be in grid's CRS. A centre exactly on the mesh boundary
+// (e.g. every boundary vertex of MeshFromDsm's mesh) counts as a hit: rays that miss are
+// retried 1e-3 cell away and evaluated on the hit face's plane at the exact centre, so
+// DsmFromMesh(MeshFromDsm(d), d) returns every triangulated cell of d unchanged.
 Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid);
 
 }  // namespace satmesh

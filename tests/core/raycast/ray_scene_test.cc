@@ -52,7 +52,7 @@ TEST(RaySceneIntersect, HitsPlaneExactly) {
 
   hit = scene.Intersect(Down(0.2f, 0.7f));
   ASSERT_TRUE(hit.hit());
-  EXPECT_EQ(hit.face, 1);  // p = (u*1 + v*0 ... ) for (0,2,3): (u, u + v)
+  EXPECT_EQ(hit.face, 1);  // face (0,2,3): p = (u, u + v)
   EXPECT_NEAR(hit.u, 0.2f, kTol);
   EXPECT_NEAR(hit.v, 0.5f, kTol);
 }
