@@ -5,24 +5,18 @@
 namespace satmesh {
 namespace {
 
-// Per-pixel data of the warp i -> j.
-struct Warp {
-  std::vector<float> a, b, db_dn;  // db_dn: ∂b per unit move of the face along its normal
-  std::vector<uint8_t> valid;
-};
-
-// Projects view i's hit points into j, tests visibility, samples j.
-Warp WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
-                  const std::vector<Eigen::Vector3f>& face_normals, const LocalFrame& frame,
-                  const PhotometricOptions& options) {
+// Projects view i's hit points into j, tests visibility, samples j. Per pixel: a, b,
+// valid, and db_dn = ∂b per unit move of the face along its normal.
+void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
+                  const std::vector<Eigen::Vector3f>& face_normals,
+                  const PhotometricOptions& options, PairWorkspace* ws) {
   const int w = vi.width(), h = vi.height();
   const size_t n = size_t(w) * h;
-  Warp warp;
+  PairWorkspace& warp = *ws;
   warp.a.assign(n, 0.f);
   warp.b.assign(n, 0.f);
   warp.db_dn.assign(n, 0.f);
   warp.valid.assign(n, 0);
-  const Eigen::Vector3d geo_scale = frame.GeoFromLocalScale();
   const double tol2 = options.visibility_tolerance_m * options.visibility_tolerance_m;
   const int wj = vj.width(), hj = vj.height();
 
@@ -37,9 +31,8 @@ Warp WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
       const float cos_ray = ray_dir.dot(normal);
       if (cos_ray > -float(options.min_ray_cos)) continue;  // grazing or back-facing
       const Eigen::Vector3f& X = vi.hit_map.points[p];
-      Eigen::Matrix<double, 2, 3> pixel_from_geo;
-      const Eigen::Vector2d xj =
-          vj.rpc.PixelFromGeo(frame.GeoFromLocal(X.cast<double>()), &pixel_from_geo);
+      Eigen::Matrix<double, 2, 3> pixel_from_local;
+      const Eigen::Vector2d xj = vj.projection.PixelFromLocal(X.cast<double>(), &pixel_from_local);
       if (!(xj.x() >= 1.0 && xj.y() >= 1.0 && xj.x() < wj - 1.0 && xj.y() < hj - 1.0)) continue;
       // Visibility in j: j's own ray through that pixel must hit the same surface point.
       const size_t q = size_t(int(xj.y())) * wj + int(xj.x());
@@ -48,8 +41,7 @@ Warp WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
       if (hit_j.face != hit.face && (vj.hit_map.points[q] - X).squaredNorm() > tol2) continue;
       float b, db_dx, db_dy;
       if (!SampleBilinearWithGradient(vj.image, xj.x(), xj.y(), &b, &db_dx, &db_dy)) continue;
-      // DΠ_j in the local frame: chain rule through the frame's (diagonal) scales.
-      const Eigen::Matrix<double, 2, 3> pixel_from_local = pixel_from_geo * geo_scale.asDiagonal();
+      // DΠ_j in the local frame (the lattice holds the chain rule through the frame).
       const Eigen::Vector2d dx_dt = pixel_from_local * ray_dir.cast<double>();
       const double db_dt = db_dx * dx_dt.x() + db_dy * dx_dt.y();
       warp.a[p] = vi.image.pixels[p];
@@ -58,7 +50,6 @@ Warp WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
       warp.valid[p] = 1;
     }
   }
-  return warp;
 }
 
 }  // namespace
@@ -66,13 +57,16 @@ Warp WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
 PairEnergy AccumulatePhotometricGradient(const ViewLevel& view_i, const ViewLevel& view_j,
                                          const TriangleMesh& mesh,
                                          const std::vector<Eigen::Vector3f>& face_normals,
-                                         const LocalFrame& frame,
                                          const PhotometricOptions& options,
                                          std::vector<Eigen::Vector3d>* vertex_gradient,
-                                         std::vector<uint8_t>* touched) {
-  const Warp warp = WarpIntoView(view_i, view_j, face_normals, frame, options);
+                                         std::vector<uint8_t>* touched,
+                                         PairWorkspace* workspace) {
+  PairWorkspace local;
+  PairWorkspace& warp = workspace ? *workspace : local;
+  WarpIntoView(view_i, view_j, face_normals, options, &warp);
   const int w = view_i.width(), h = view_i.height();
-  const ZnccField field = ComputeZnccField(warp.a, warp.b, warp.valid, w, h, options.zncc);
+  const ZnccField field =
+      ComputeZnccField(warp.a, warp.b, warp.valid, w, h, options.zncc, &warp.zncc);
 
   PairEnergy energy;
   energy.sum_zncc = field.sum_zncc;

@@ -28,14 +28,21 @@ struct PairEnergy {
   long num_valid_pixels = 0;
 };
 
+// Scratch buffers of one pair-direction, reused across calls.
+struct PairWorkspace {
+  std::vector<float> a, b, db_dn;
+  std::vector<uint8_t> valid;
+  ZnccWorkspace zncc;
+};
+
 // Adds ∂M_ij/∂V into *vertex_gradient (if not null) and marks the vertices this
 // pair-direction touched in *touched (if not null). Hit maps of both views must be current.
 PairEnergy AccumulatePhotometricGradient(const ViewLevel& view_i, const ViewLevel& view_j,
                                          const TriangleMesh& mesh,
                                          const std::vector<Eigen::Vector3f>& face_normals,
-                                         const LocalFrame& frame,
                                          const PhotometricOptions& options,
                                          std::vector<Eigen::Vector3d>* vertex_gradient,
-                                         std::vector<uint8_t>* touched);
+                                         std::vector<uint8_t>* touched,
+                                         PairWorkspace* workspace = nullptr);
 
 }  // namespace satmesh

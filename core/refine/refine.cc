@@ -67,24 +67,41 @@ struct LevelContext {
 };
 
 // Mean ZNCC over all pair-directions; fills the gradient and per-vertex pair counts.
+// Pair-directions run in parallel (one per thread, own accumulators, summed at the end).
 double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& slot,
                        const std::vector<std::pair<int, int>>& pairs, const TriangleMesh& mesh,
-                       const LocalFrame& frame, const PhotometricOptions& options,
-                       std::vector<Eigen::Vector3d>* gradient, std::vector<int>* seen) {
+                       const PhotometricOptions& options, std::vector<Eigen::Vector3d>* gradient,
+                       std::vector<int>* seen) {
   const auto normals = FaceNormals(mesh);
-  std::vector<uint8_t> touched(mesh.vertices.size());
+  std::vector<std::pair<int, int>> directions;
+  for (const auto& [i, j] : pairs) directions.insert(directions.end(), {{i, j}, {j, i}});
+  const size_t nv = mesh.vertices.size();
   double sum = 0;
   long count = 0;
-  for (const auto& [i, j] : pairs) {
-    for (const auto& [a, b] : {std::pair{i, j}, std::pair{j, i}}) {
-      std::fill(touched.begin(), touched.end(), 0);
-      const PairEnergy e = AccumulatePhotometricGradient(views[slot[a]], views[slot[b]], mesh,
-                                                         normals, frame, options, gradient,
-                                                         seen ? &touched : nullptr);
+#pragma omp parallel
+  {
+    std::vector<Eigen::Vector3d> local_gradient(gradient ? nv : 0, Eigen::Vector3d::Zero());
+    std::vector<int> local_seen(seen ? nv : 0, 0);
+    std::vector<uint8_t> touched(seen ? nv : 0);
+    PairWorkspace workspace;
+#pragma omp for schedule(dynamic, 1) reduction(+ : sum, count)
+    for (size_t d = 0; d < directions.size(); ++d) {
+      const auto [a, b] = directions[d];
+      if (seen) std::fill(touched.begin(), touched.end(), 0);
+      const PairEnergy e = AccumulatePhotometricGradient(
+          views[slot[a]], views[slot[b]], mesh, normals, options,
+          gradient ? &local_gradient : nullptr, seen ? &touched : nullptr, &workspace);
       sum += e.sum_zncc;
       count += e.num_windows;
       if (seen)
-        for (size_t v = 0; v < touched.size(); ++v) (*seen)[v] += touched[v];
+        for (size_t v = 0; v < nv; ++v) local_seen[v] += touched[v];
+    }
+#pragma omp critical
+    {
+      if (gradient)
+        for (size_t v = 0; v < nv; ++v) (*gradient)[v] += local_gradient[v];
+      if (seen)
+        for (size_t v = 0; v < nv; ++v) (*seen)[v] += local_seen[v];
     }
   }
   return count > 0 ? sum / count : 0.0;
@@ -101,14 +118,24 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
   // Views that take part in a pair, at this level.
   std::vector<int> slot(ctx.sources.size(), -1);
   std::vector<ViewLevel> views;
+  // The box the surface lives in: the mesh's extent, the input's height range, margins.
   const double margin = 2.0 + 0.1 * (ctx.input.max_z - ctx.input.min_z);
+  Eigen::Vector3d box_min = Eigen::Vector3d::Constant(1e30), box_max = -box_min;
+  for (const auto& p : mesh->vertices) {
+    box_min = box_min.cwiseMin(p.cast<double>());
+    box_max = box_max.cwiseMax(p.cast<double>());
+  }
+  box_min -= Eigen::Vector3d(10, 10, 0);
+  box_max += Eigen::Vector3d(10, 10, 0);
+  box_min.z() = std::min(box_min.z(), ctx.input.min_z) - margin;
+  box_max.z() = std::max(box_max.z(), ctx.input.max_z) + margin;
   for (const auto& [i, j] : ctx.pairs) {
     for (int v : {i, j}) {
       if (slot[v] >= 0) continue;
       slot[v] = int(views.size());
       views.push_back(MakeViewLevel(v, level, ctx.sources[v].pyramid[level], ctx.sources[v].rpc,
-                                    ctx.input.frame, ctx.input.min_z - margin,
-                                    ctx.input.max_z + margin, opt.virtual_camera_grid_px));
+                                    ctx.input.frame, box_min, box_max,
+                                    opt.virtual_camera_grid_px));
     }
   }
 
@@ -137,7 +164,7 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
     t0 = Clock::now();
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
     std::fill(seen.begin(), seen.end(), 0);
-    const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, ctx.input.frame, photo,
+    const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, photo,
                                         last ? nullptr : &gradient, last ? nullptr : &seen);
     stats.mean_zncc.push_back(zncc);
     stats.times.gradient_s += Seconds(t0);

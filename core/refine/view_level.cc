@@ -5,7 +5,9 @@
 namespace satmesh {
 
 ViewLevel MakeViewLevel(int view, int level, ImageF image_level, const RpcModel& rpc_window,
-                        const LocalFrame& frame, double z_low, double z_high, int grid_px) {
+                        const LocalFrame& frame, const Eigen::Vector3d& box_min,
+                        const Eigen::Vector3d& box_max, int grid_px) {
+  const double z_low = box_min.z(), z_high = box_max.z();
   ViewLevel out;
   out.view = view;
   out.level = level;
@@ -13,6 +15,9 @@ ViewLevel MakeViewLevel(int view, int level, ImageF image_level, const RpcModel&
   out.rpc = rpc_window.AtLevel(level);
   out.camera = VirtualCamera(out.rpc, frame, out.image.width, out.image.height, z_low, z_high,
                              grid_px);
+  // Lattice spacing: the RFM is near-linear over tens of metres (see projection_grid.h).
+  out.projection = ProjectionGrid(out.rpc, frame, box_min, box_max, /*spacing_xy_m=*/16.0,
+                                  /*spacing_z_m=*/8.0);
   const int w = out.image.width, h = out.image.height;
   out.rays.resize(size_t(w) * h);
 #pragma omp parallel for schedule(static)

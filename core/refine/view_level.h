@@ -5,6 +5,7 @@
 
 #include "core/image/image.h"
 #include "core/raycast/ray_scene.h"
+#include "core/refine/projection_grid.h"
 #include "core/refine/virtual_camera.h"
 #include "core/rpc/rpc_model.h"
 
@@ -21,6 +22,7 @@ struct ViewLevel {
   ImageF image;        // normalised radiometry, pyramid level
   RpcModel rpc;        // pixel coordinates of this level
   VirtualCamera camera;
+  ProjectionGrid projection;  // fast pixel_from_local of this level
   std::vector<Ray> rays;  // per pixel
   HitMap hit_map;
 
@@ -28,9 +30,11 @@ struct ViewLevel {
   int height() const { return image.height; }
 };
 
-// Builds the level data (rays from the virtual camera) of one view.
+// Builds the level data (rays from the virtual camera, projection lattice over the box
+// [box_min, box_max] of the frame) of one view. The box's z range bounds the rays.
 ViewLevel MakeViewLevel(int view, int level, ImageF image_level, const RpcModel& rpc_window,
-                        const LocalFrame& frame, double z_low, double z_high, int grid_px);
+                        const LocalFrame& frame, const Eigen::Vector3d& box_min,
+                        const Eigen::Vector3d& box_max, int grid_px);
 
 // Casts all rays of the view against the scene (the paper's dominant cost: once per view
 // per iteration, shared by all pairs).

@@ -5,9 +5,11 @@
 namespace satmesh {
 namespace {
 
-// Sums of `in` over the (2r+1)² window around each pixel (truncated at the borders).
-std::vector<double> BoxSum(const std::vector<double>& in, int width, int height, int r) {
-  std::vector<double> rows(in.size()), out(in.size());
+// Sums of `in` over the (2r+1)² window around each pixel (truncated at the borders), in place.
+void BoxSum(std::vector<double>& in_out, int width, int height, int r, std::vector<double>& rows) {
+  const std::vector<double>& in = in_out;
+  std::vector<double>& out = in_out;
+  rows.resize(in.size());
   for (int y = 0; y < height; ++y) {
     const double* src = &in[size_t(y) * width];
     double* dst = &rows[size_t(y) * width];
@@ -30,20 +32,23 @@ std::vector<double> BoxSum(const std::vector<double>& in, int width, int height,
     if (y - r >= 0)
       for (int x = 0; x < width; ++x) acc[x] -= rows[size_t(y - r) * width + x];
   }
-  return out;
 }
 
 }  // namespace
 
 ZnccField ComputeZnccField(const std::vector<float>& a, const std::vector<float>& b,
                            const std::vector<uint8_t>& valid, int width, int height,
-                           const ZnccOptions& options) {
+                           const ZnccOptions& options, ZnccWorkspace* workspace) {
+  ZnccWorkspace local;
+  ZnccWorkspace& ws = workspace ? *workspace : local;
   const size_t n = size_t(width) * height;
   const int r = options.window_radius;
   const double min_count = options.min_valid_fraction * (2 * r + 1) * (2 * r + 1);
   const double eps = options.variance_floor;
 
-  std::vector<double> v(n), va(n), vb(n), vaa(n), vbb(n), vab(n);
+  for (auto& b : ws.buffers) b.assign(n, 0.0);
+  std::vector<double>&v = ws.buffers[0], &va = ws.buffers[1], &vb = ws.buffers[2],
+                     &vaa = ws.buffers[3], &vbb = ws.buffers[4], &vab = ws.buffers[5];
   for (size_t i = 0; i < n; ++i) {
     if (!valid[i]) continue;
     v[i] = 1;
@@ -53,20 +58,15 @@ ZnccField ComputeZnccField(const std::vector<float>& a, const std::vector<float>
     vbb[i] = double(b[i]) * b[i];
     vab[i] = double(a[i]) * b[i];
   }
-  const auto s_v = BoxSum(v, width, height, r), s_a = BoxSum(va, width, height, r),
-             s_b = BoxSum(vb, width, height, r), s_aa = BoxSum(vaa, width, height, r),
-             s_bb = BoxSum(vbb, width, height, r), s_ab = BoxSum(vab, width, height, r);
+  for (int k = 0; k < 6; ++k) BoxSum(ws.buffers[k], width, height, r, ws.rows);
+  const std::vector<double>&s_v = v, &s_a = va, &s_b = vb, &s_aa = vaa, &s_bb = vbb, &s_ab = vab;
 
   ZnccField field;
   field.zncc.assign(n, 0.f);
   field.dM_db.assign(n, 0.f);
-  // Per-window coefficients of the derivative (A..D in DESIGN.md), reusing the buffers.
-  std::vector<double>& A = v;
-  std::vector<double>& B = va;
-  std::vector<double>& C = vb;
-  std::vector<double>& D = vaa;
+  // Per-window coefficients of the derivative (A..D in DESIGN.md).
+  std::vector<double>&A = ws.buffers[6], &B = ws.buffers[7], &C = ws.buffers[8], &D = ws.buffers[9];
   for (size_t i = 0; i < n; ++i) {
-    A[i] = B[i] = C[i] = D[i] = 0;
     const double count = s_v[i];
     if (!valid[i] || count < min_count) continue;
     const double mu_a = s_a[i] / count, mu_b = s_b[i] / count;
@@ -83,8 +83,8 @@ ZnccField ComputeZnccField(const std::vector<float>& a, const std::vector<float>
     C[i] = zncc / (count * var_b);
     D[i] = mu_b * C[i];
   }
-  const auto sum_A = BoxSum(A, width, height, r), sum_B = BoxSum(B, width, height, r),
-             sum_C = BoxSum(C, width, height, r), sum_D = BoxSum(D, width, height, r);
+  for (int k = 6; k < 10; ++k) BoxSum(ws.buffers[k], width, height, r, ws.rows);
+  const std::vector<double>&sum_A = A, &sum_B = B, &sum_C = C, &sum_D = D;
   for (size_t i = 0; i < n; ++i) {
     if (!valid[i]) continue;
     const double dzncc_db = a[i] * sum_A[i] - sum_B[i] - b[i] * sum_C[i] + sum_D[i];

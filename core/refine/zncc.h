@@ -22,9 +22,14 @@ struct ZnccField {
   long num_windows = 0;
 };
 
+// Scratch buffers, reused across calls to avoid reallocating per pair.
+struct ZnccWorkspace {
+  std::vector<double> buffers[10], rows;
+};
+
 // a, b: reference and warped images (width*height, row-major); valid: 1 where both exist.
 ZnccField ComputeZnccField(const std::vector<float>& a, const std::vector<float>& b,
                            const std::vector<uint8_t>& valid, int width, int height,
-                           const ZnccOptions& options);
+                           const ZnccOptions& options, ZnccWorkspace* workspace = nullptr);
 
 }  // namespace satmesh

@@ -21,7 +21,8 @@ TwoViews MakeTwoViews(const TriangleMesh& mesh) {
   s.input = testing::MakePlaneInput(plane, {{3, 0}, {10, 90}}, mesh, 120, 0.5);
   for (int v = 0; v < 2; ++v) {
     s.views.push_back(MakeViewLevel(v, 0, NormalizeRadiometry(s.input.views[v].image),
-                                    s.input.views[v].rpc, s.input.frame, -15, 20, 8));
+                                    s.input.views[v].rpc, s.input.frame,
+                                    Eigen::Vector3d(-40, -40, -15), Eigen::Vector3d(40, 40, 20), 8));
   }
   s.options.visibility_tolerance_m = 1.0;
   s.options.zncc.variance_floor = 1e-4;
@@ -34,9 +35,9 @@ double Energy(TwoViews& s, const TriangleMesh& mesh, std::vector<Eigen::Vector3d
   for (auto& v : s.views) CastHitMap(scene, &v);
   const auto normals = FaceNormals(mesh);
   double e = 0;
-  e -= AccumulatePhotometricGradient(s.views[0], s.views[1], mesh, normals, s.input.frame,
+  e -= AccumulatePhotometricGradient(s.views[0], s.views[1], mesh, normals,
                                      s.options, gradient, nullptr).sum_zncc;
-  e -= AccumulatePhotometricGradient(s.views[1], s.views[0], mesh, normals, s.input.frame,
+  e -= AccumulatePhotometricGradient(s.views[1], s.views[0], mesh, normals,
                                      s.options, gradient, nullptr).sum_zncc;
   return e;
 }
