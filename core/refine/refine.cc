@@ -107,6 +107,55 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
   return count > 0 ? sum / count : 0.0;
 }
 
+// The level data of every view that takes part in a pair; slot[view] indexes it (-1: none).
+std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
+                                      const std::vector<ViewSource>& sources,
+                                      const std::vector<std::pair<int, int>>& pairs,
+                                      const TriangleMesh& mesh, int level, int grid_px,
+                                      std::vector<int>* slot) {
+  // The box the surface lives in: the mesh's extent, the input's height range, margins.
+  const double margin = 2.0 + 0.1 * (input.max_z - input.min_z);
+  Eigen::Vector3d box_min = Eigen::Vector3d::Constant(1e30), box_max = -box_min;
+  for (const auto& p : mesh.vertices) {
+    box_min = box_min.cwiseMin(p.cast<double>());
+    box_max = box_max.cwiseMax(p.cast<double>());
+  }
+  box_min -= Eigen::Vector3d(10, 10, 0);
+  box_max += Eigen::Vector3d(10, 10, 0);
+  box_min.z() = std::min(box_min.z(), input.min_z) - margin;
+  box_max.z() = std::max(box_max.z(), input.max_z) + margin;
+  slot->assign(sources.size(), -1);
+  std::vector<ViewLevel> views;
+  for (const auto& [i, j] : pairs) {
+    for (int v : {i, j}) {
+      if ((*slot)[v] >= 0) continue;
+      (*slot)[v] = int(views.size());
+      views.push_back(MakeViewLevel(v, level, sources[v].pyramid[level], sources[v].rpc,
+                                    input.frame, box_min, box_max, grid_px));
+    }
+  }
+  return views;
+}
+
+PhotometricOptions PhotometricOptionsAt(const RefineOptions& opt, double gsd) {
+  PhotometricOptions photo;
+  photo.zncc.window_radius = opt.zncc_window_radius;
+  photo.zncc.min_valid_fraction = opt.min_window_valid;
+  photo.zncc.variance_floor = opt.variance_floor;
+  photo.visibility_tolerance_m = opt.visibility_tolerance_gsd * gsd;
+  photo.min_ray_cos = opt.min_ray_cos;
+  return photo;
+}
+
+std::vector<ViewSource> MakeViewSources(const RefineInput& input, int levels) {
+  std::vector<ViewSource> sources(input.views.size());
+  for (size_t v = 0; v < input.views.size(); ++v) {
+    sources[v].pyramid = GaussianPyramid(NormalizeRadiometry(input.views[v].image), levels + 1);
+    sources[v].rpc = input.views[v].rpc;
+  }
+  return sources;
+}
+
 LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
   const auto level_start = Clock::now();
   const RefineOptions& opt = ctx.options;
@@ -115,36 +164,10 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
   stats.gsd_m = ctx.gsd_m * std::ldexp(1.0, level);
   const double gsd = stats.gsd_m;
 
-  // Views that take part in a pair, at this level.
-  std::vector<int> slot(ctx.sources.size(), -1);
-  std::vector<ViewLevel> views;
-  // The box the surface lives in: the mesh's extent, the input's height range, margins.
-  const double margin = 2.0 + 0.1 * (ctx.input.max_z - ctx.input.min_z);
-  Eigen::Vector3d box_min = Eigen::Vector3d::Constant(1e30), box_max = -box_min;
-  for (const auto& p : mesh->vertices) {
-    box_min = box_min.cwiseMin(p.cast<double>());
-    box_max = box_max.cwiseMax(p.cast<double>());
-  }
-  box_min -= Eigen::Vector3d(10, 10, 0);
-  box_max += Eigen::Vector3d(10, 10, 0);
-  box_min.z() = std::min(box_min.z(), ctx.input.min_z) - margin;
-  box_max.z() = std::max(box_max.z(), ctx.input.max_z) + margin;
-  for (const auto& [i, j] : ctx.pairs) {
-    for (int v : {i, j}) {
-      if (slot[v] >= 0) continue;
-      slot[v] = int(views.size());
-      views.push_back(MakeViewLevel(v, level, ctx.sources[v].pyramid[level], ctx.sources[v].rpc,
-                                    ctx.input.frame, box_min, box_max,
-                                    opt.virtual_camera_grid_px));
-    }
-  }
-
-  PhotometricOptions photo;
-  photo.zncc.window_radius = opt.zncc_window_radius;
-  photo.zncc.min_valid_fraction = opt.min_window_valid;
-  photo.zncc.variance_floor = opt.variance_floor;
-  photo.visibility_tolerance_m = opt.visibility_tolerance_gsd * gsd;
-  photo.min_ray_cos = opt.min_ray_cos;
+  std::vector<int> slot;
+  std::vector<ViewLevel> views = MakeViewLevels(ctx.input, ctx.sources, ctx.pairs, *mesh, level,
+                                                opt.virtual_camera_grid_px, &slot);
+  const PhotometricOptions photo = PhotometricOptionsAt(opt, gsd);
 
   RayScene scene(*mesh);
   const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
@@ -204,6 +227,23 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
 
 }  // namespace
 
+double MeasureMeanZncc(const RefineInput& input, const TriangleMesh& mesh,
+                       const std::vector<std::pair<int, int>>& pairs, int level,
+                       const RefineOptions& options) {
+  const std::string problem = options.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "refine options: " + problem);
+  const std::vector<ViewSource> sources = MakeViewSources(input, level);
+  std::vector<int> slot;
+  std::vector<ViewLevel> views =
+      MakeViewLevels(input, sources, pairs, mesh, level, options.virtual_camera_grid_px, &slot);
+  const double gsd = GroundSamplingDistance(input.views[pairs.front().first].rpc, input.frame) *
+                     std::ldexp(1.0, level);
+  RayScene scene(mesh);
+  for (auto& v : views) CastHitMap(scene, &v);
+  return PhotometricPass(views, slot, pairs, mesh, PhotometricOptionsAt(options, gsd), nullptr,
+                         nullptr);
+}
+
 RefineResult Refine(const RefineInput& input, const RefineOptions& options,
                     const Progress& progress) {
   const std::string problem = options.Check();
@@ -213,14 +253,12 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
   RefineResult result;
 
   // Radiometric normalisation and pyramids; viewing directions for pair selection.
-  std::vector<ViewSource> sources(input.views.size());
+  std::vector<ViewSource> sources = MakeViewSources(input, options.levels);
   std::vector<PairCandidateView> candidates(input.views.size());
   double gsd_sum = 0;
   for (size_t v = 0; v < input.views.size(); ++v) {
-    const ImageF normalised = NormalizeRadiometry(input.views[v].image);
+    const ImageF& normalised = sources[v].pyramid[0];
     candidates[v].contrast = StdDev(normalised);
-    sources[v].pyramid = GaussianPyramid(normalised, options.levels + 1);
-    sources[v].rpc = input.views[v].rpc;
     const VirtualCamera camera(input.views[v].rpc, input.frame, normalised.width,
                                normalised.height, input.min_z - 1, input.max_z + 1,
                                std::max(normalised.width, normalised.height));

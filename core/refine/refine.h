@@ -49,6 +49,13 @@ struct RefineResult {
   double total_s = 0;
 };
 
+// Mean ZNCC (the photo-consistency the refinement maximises) of `mesh` (in input.frame)
+// over the given view pairs at pyramid level `level`, without changing anything. For
+// held-out-view checks: measure pairs (held_out, used) before and after refinement.
+double MeasureMeanZncc(const RefineInput& input, const TriangleMesh& mesh,
+                       const std::vector<std::pair<int, int>>& pairs, int level,
+                       const RefineOptions& options = {});
+
 // Throws Error{kInvalidArgument} if options.Check() fails, Error{kInvalidInput} for
 // unusable input (no pair, empty mesh), Error{kCancelled} when progress says so.
 RefineResult Refine(const RefineInput& input, const RefineOptions& options,
