@@ -1,0 +1,176 @@
+#include "client/bench_support.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "core/common/error.h"
+#include "core/dsm/dsm.h"
+#include "core/geo/crs.h"
+#include "core/mesh/mesh_io.h"
+#include "core/raycast/ray_scene.h"
+#include "core/refine/view_level.h"
+#include "proto/job_spec_json.h"
+
+namespace satmesh::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// Absolute vertices of `mesh` (in `crs`) into `frame`.
+TriangleMesh IntoFrame(const TriangleMesh& mesh, const std::string& crs, const LocalFrame& frame) {
+  std::vector<Eigen::Vector3d> points(mesh.vertices.size());
+  for (size_t i = 0; i < points.size(); ++i) points[i] = mesh.AbsoluteVertex(i);
+  CrsTransform(crs, kWgs84Geographic3D).Apply(&points);
+  TriangleMesh out;
+  out.faces = mesh.faces;
+  out.vertices.resize(points.size());
+  for (size_t i = 0; i < points.size(); ++i)
+    out.vertices[i] = frame.LocalFromGeo(points[i]).cast<float>();
+  return out;
+}
+
+// The box MakeViewLevels uses for a level: mesh extent +-10 m, height range with margins.
+void LevelBox(const RefineInput& input, const TriangleMesh& mesh, Eigen::Vector3d* box_min,
+              Eigen::Vector3d* box_max) {
+  const double margin = 2.0 + 0.1 * (input.max_z - input.min_z);
+  *box_min = Eigen::Vector3d::Constant(1e30);
+  *box_max = -*box_min;
+  for (const auto& p : mesh.vertices) {
+    *box_min = box_min->cwiseMin(p.cast<double>());
+    *box_max = box_max->cwiseMax(p.cast<double>());
+  }
+  *box_min -= Eigen::Vector3d(10, 10, 0);
+  *box_max += Eigen::Vector3d(10, 10, 0);
+  box_min->z() = std::min(box_min->z(), input.min_z) - margin;
+  box_max->z() = std::max(box_max->z(), input.max_z) + margin;
+}
+
+}  // namespace
+
+JobSpec ReadJobWithOverrides(const std::string& job_path, const std::vector<std::string>& overrides) {
+  std::ifstream in(job_path);
+  SATMESH_CHECK(in.good(), ErrorCode::kNotFound, "job file '" + job_path + "' cannot be opened");
+  nlohmann::json job;
+  try {
+    job = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    ThrowError(ErrorCode::kInvalidArgument, "job file '" + job_path + "': invalid JSON: " + e.what());
+  }
+  for (const auto& o : overrides) proto::ApplyOptionOverride(&job, o);
+  return proto::JobSpecFromJson(job, std::filesystem::path(job_path).parent_path().string());
+}
+
+TileInput PrepareJobInput(const JobSpec& spec) {
+  const Dsm dsm = ReadDsm(spec.initial_dsm);
+  const double cell = std::abs(dsm.geo_transform[1]);
+  const double coarse_cell = 0.5 * spec.refine.coarse_edge_px * cell * std::ldexp(1.0, spec.refine.levels);
+  return PrepareTileInput(spec, dsm, coarse_cell);
+}
+
+TriangleMesh LoadMeshInFrame(const std::string& path, const JobSpec& spec,
+                             const std::string& default_crs, const LocalFrame& frame) {
+  namespace fs = std::filesystem;
+  std::string file = path == "initial" ? spec.initial_dsm : path;
+  if (fs::is_directory(file)) file = (fs::path(file) / "mesh.ply").string();
+  std::string ext = fs::path(file).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".tif" || ext == ".tiff") {
+    const Dsm dsm = ReadDsm(file);
+    return IntoFrame(MeshFromDsm(dsm), dsm.crs_wkt, frame);
+  }
+  const TriangleMesh mesh = ReadMesh(file);
+  return IntoFrame(mesh, mesh.crs.empty() ? default_crs : mesh.crs, frame);
+}
+
+std::vector<std::pair<int, int>> ParsePairs(const std::string& text, int num_views) {
+  std::vector<std::pair<int, int>> pairs;
+  std::stringstream items(text);
+  std::string item;
+  while (std::getline(items, item, ',')) {
+    int a = -1, b = -1;
+    char dash = 0, extra = 0;
+    std::stringstream s(item);
+    const bool ok = bool(s >> a >> dash >> b) && dash == '-' && !(s >> extra);
+    SATMESH_CHECK(ok && a != b, ErrorCode::kInvalidArgument,
+                  "--pairs: '" + item + "' is not of the form I-J with I != J");
+    SATMESH_CHECK(a >= 0 && b >= 0 && a < num_views && b < num_views, ErrorCode::kInvalidArgument,
+                  "--pairs: '" + item + "' names a view outside [0, " + std::to_string(num_views) + ")");
+    pairs.emplace_back(a, b);
+  }
+  SATMESH_CHECK(!pairs.empty(), ErrorCode::kInvalidArgument, "--pairs: no pair in '" + text + "'");
+  return pairs;
+}
+
+RaycastTiming TimeRaycast(const RefineInput& input, const TriangleMesh& mesh,
+                          const std::vector<int>& views, int level, int grid_px, int repeats) {
+  Eigen::Vector3d box_min, box_max;
+  LevelBox(input, mesh, &box_min, &box_max);
+  std::vector<ViewLevel> levels;
+  for (int v : views) {
+    const ImageF& full = input.views[v].image;
+    const int scale = 1 << level;
+    ImageF size_only((full.width + scale - 1) / scale, (full.height + scale - 1) / scale);
+    levels.push_back(MakeViewLevel(v, level, std::move(size_only), input.views[v].rpc, input.frame,
+                                   box_min, box_max, grid_px));
+  }
+  RaycastTiming timing;
+  auto t0 = Clock::now();
+  const RayScene scene(mesh);
+  timing.build_s = Seconds(t0);
+  std::vector<RayHit> hits;
+  timing.intersect_s = timing.hit_map_s = 1e300;
+  for (int r = 0; r < std::max(1, repeats); ++r) {
+    t0 = Clock::now();
+    for (const auto& v : levels) {
+      hits.resize(v.rays.size());
+      scene.Intersect(v.rays.data(), hits.data(), v.rays.size());
+    }
+    timing.intersect_s = std::min(timing.intersect_s, Seconds(t0));
+    t0 = Clock::now();
+    for (auto& v : levels) CastHitMap(scene, &v);
+    timing.hit_map_s = std::min(timing.hit_map_s, Seconds(t0));
+  }
+  long hit = 0;
+  for (const auto& v : levels) {
+    timing.num_rays += long(v.rays.size());
+    for (const auto& h : v.hit_map.hits) hit += h.hit();
+  }
+  timing.hit_fraction = timing.num_rays > 0 ? double(hit) / timing.num_rays : 0;
+  return timing;
+}
+
+MachineInfo ReadMachineInfo() {
+  MachineInfo info;
+  info.num_cpus = int(std::thread::hardware_concurrency());
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  for (std::string line; std::getline(cpuinfo, line);) {
+    if (line.rfind("model name", 0) == 0) {
+      info.cpu_model = line.substr(line.find(':') + 2);
+      break;
+    }
+  }
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  double kib = 0;
+  if (meminfo >> key >> kib && key == "MemTotal:") info.mem_total_gib = kib / (1024.0 * 1024.0);
+  std::ifstream("/proc/loadavg") >> info.load_1m >> info.load_5m >> info.load_15m;
+  return info;
+}
+
+double PeakRssMib() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+}  // namespace satmesh::cli

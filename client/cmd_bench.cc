@@ -1,0 +1,169 @@
+// satmesh bench: one refinement run (same path as `satmesh refine`) with per-level stage
+// times, the time Embree alone needs for one full-resolution iteration's rays, peak
+// memory and the machine's load.
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "client/args.h"
+#include "client/bench_support.h"
+#include "client/command.h"
+#include "client/refine_runner.h"
+#include "core/synth/scene_writer.h"
+
+namespace satmesh::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// Per-iteration stage times: ray casting and the photometric pass run iterations+1 times
+// (the last one only measures), smoothing and the update `iterations` times.
+StageTimes PerIteration(const LevelStats& level) {
+  const double passes = level.iterations + 1, steps = std::max(1, level.iterations);
+  return {level.times.raycast_s / passes, level.times.gradient_s / passes,
+          level.times.smoothness_s / steps, level.times.update_s / steps};
+}
+double Sum(const StageTimes& t) { return t.raycast_s + t.gradient_s + t.smoothness_s + t.update_s; }
+
+nlohmann::json MachineJson(const MachineInfo& m) {
+  return {{"cpu_model", m.cpu_model}, {"num_cpus", m.num_cpus}, {"mem_total_gib", m.mem_total_gib},
+          {"load_avg", {m.load_1m, m.load_5m, m.load_15m}}};
+}
+
+// The job to run: --job, --scene DIR/job.json, or a generated preset scene (reused when
+// its job.json exists).
+std::string ResolveJob(const Args& args, const std::string& out, nlohmann::json* report) {
+  if (args.Has("job")) return args.Require("job");
+  if (args.Has("scene")) return (fs::path(args.Require("scene")) / "job.json").string();
+  const std::string preset = args.GetOr("preset", "small");
+  const int seed = args.GetInt("seed", 1);
+  const fs::path scene = fs::path(out) / ("scene-" + preset + "-" + std::to_string(seed));
+  const fs::path job = scene / "job.json";
+  (*report)["scene"] = {{"preset", preset}, {"seed", seed}, {"dir", scene.string()}};
+  if (fs::exists(job)) {
+    std::printf("scene: reusing %s\n", scene.string().c_str());
+    return job.string();
+  }
+  std::printf("scene: generating preset '%s' seed %d -> %s\n", preset.c_str(), seed, scene.string().c_str());
+  const auto t0 = Clock::now();
+  const auto result = synth::GenerateScene(scene.string(), synth::SynthPreset(preset, uint32_t(seed)));
+  (*report)["scene"]["generate_s"] = Seconds(t0);
+  (*report)["scene"]["num_views"] = result.views.size();
+  std::printf("scene: %zu views, %d buildings, generated in %.1f s\n", result.views.size(),
+              result.num_buildings, Seconds(t0));
+  return job.string();
+}
+
+void PrintLevels(const RefineResult& refine) {
+  std::printf("\n%5s %5s %9s %9s %6s %15s | per iteration [s]: %8s %8s %8s %8s %8s | %8s\n", "level",
+              "iters", "vertices", "faces", "GSD_m", "mean ZNCC", "raycast", "gradient", "smooth",
+              "update", "total", "level_s");
+  for (const auto& level : refine.levels) {
+    const StageTimes t = PerIteration(level);
+    std::printf("%5d %5d %9d %9d %6.2f %7.4f->%7.4f | %18s %8.3f %8.3f %8.3f %8.3f %8.3f | %8.1f\n",
+                level.level, level.iterations, level.num_vertices, level.num_faces, level.gsd_m,
+                level.mean_zncc.front(), level.mean_zncc.back(), "", t.raycast_s, t.gradient_s,
+                t.smoothness_s, t.update_s, Sum(t), level.level_s);
+  }
+}
+
+int RunBench(const std::vector<std::string>& argv) {
+  const Args args(argv, {"help"});
+  if (args.Has("help") || !args.positionals().empty()) {
+    std::printf(
+        "usage: satmesh bench [--preset small|default|large --seed N | --scene DIR | --job JOB.json]\n"
+        "                     [--out DIR] [--set key=value ...] [--repeats N] [--json OUT]\n"
+        "  Refines (as `satmesh refine`) and reports per level the stage times per iteration, the\n"
+        "  time Embree alone needs for the rays of one full-resolution iteration, peak memory.\n"
+        "  Preset scenes are generated into DIR/scene-<preset>-<seed> (default DIR satmesh-bench)\n"
+        "  and reused when present; results go to DIR/result.\n");
+    return args.Has("help") ? kExitOk : kExitUsage;
+  }
+  const auto start = Clock::now();
+  const std::string out = args.GetOr("out", "satmesh-bench");
+  const auto overrides = args.GetAll("set");
+  nlohmann::json report;
+  const MachineInfo before = ReadMachineInfo();
+  std::printf("machine: %s, %d logical CPUs, %.1f GiB; load average %.2f %.2f %.2f\n",
+              before.cpu_model.c_str(), before.num_cpus, before.mem_total_gib, before.load_1m,
+              before.load_5m, before.load_15m);
+  report["machine_before"] = MachineJson(before);
+
+  const std::string job = ResolveJob(args, out, &report);
+  report["job"] = job;
+  report["overrides"] = overrides;
+  const auto refine_start = Clock::now();
+  const JobOutputs outputs = RunJobFile(job, (fs::path(out) / "result").string(), overrides);
+  const double run_s = Seconds(refine_start);
+  const RefineResult& refine = outputs.refine;
+  PrintLevels(refine);
+
+  // Embree alone on the final mesh with the rays of one level-0 iteration.
+  const JobSpec spec = ReadJobWithOverrides(job, overrides);
+  const TileInput input = PrepareJobInput(spec);
+  std::set<int> used;
+  for (const auto& [i, j] : refine.pairs) used.insert(i), used.insert(j);
+  const RaycastTiming ray = TimeRaycast(input.refine, refine.mesh, {used.begin(), used.end()},
+                                        /*level=*/0, spec.refine.virtual_camera_grid_px,
+                                        args.GetInt("repeats", 3));
+  const LevelStats& finest = refine.levels.back();
+  const double iteration_s = Sum(PerIteration(finest));
+  const double ratio = iteration_s / std::max(1e-12, ray.intersect_s);
+  std::printf("\nEmbree alone, level %d: %ld rays (%zu views), hit %.1f%%: BVH build %.3f s, "
+              "Intersect %.3f s, CastHitMap %.3f s (best of %d)\n",
+              finest.level, ray.num_rays, used.size(), 100 * ray.hit_fraction, ray.build_s,
+              ray.intersect_s, ray.hit_map_s, args.GetInt("repeats", 3));
+  std::printf("level-%d iteration %.3f s = %.2fx Embree alone (issue target: <= 2x)\n",
+              finest.level, iteration_s, ratio);
+
+  const MachineInfo after = ReadMachineInfo();
+  const double total_s = Seconds(start);
+  std::printf("pairs %zu; prepare %.1f s, refine %.1f s, write %.1f s, run %.1f s; total %.1f s; "
+              "peak RSS %.0f MiB; load average %.2f %.2f %.2f\n",
+              refine.pairs.size(), outputs.prepare_s, refine.total_s, outputs.write_s, run_s,
+              total_s, PeakRssMib(), after.load_1m, after.load_5m, after.load_15m);
+
+  if (args.Has("json")) {
+    nlohmann::json levels = nlohmann::json::array();
+    for (const auto& level : refine.levels) {
+      const StageTimes t = PerIteration(level);
+      levels.push_back({{"level", level.level}, {"iterations", level.iterations},
+                        {"vertices", level.num_vertices}, {"faces", level.num_faces},
+                        {"gsd_m", level.gsd_m}, {"mean_zncc", level.mean_zncc},
+                        {"per_iteration_s", {{"raycast", t.raycast_s}, {"gradient", t.gradient_s},
+                                             {"smoothness", t.smoothness_s}, {"update", t.update_s},
+                                             {"total", Sum(t)}}},
+                        {"level_s", level.level_s}});
+    }
+    report["levels"] = levels;
+    report["num_pairs"] = refine.pairs.size();
+    report["embree_alone"] = {{"level", finest.level}, {"num_rays", ray.num_rays},
+                              {"num_views", used.size()}, {"hit_fraction", ray.hit_fraction},
+                              {"build_s", ray.build_s}, {"intersect_s", ray.intersect_s},
+                              {"cast_hit_map_s", ray.hit_map_s}, {"iteration_s", iteration_s},
+                              {"iteration_over_intersect", ratio}};
+    report["prepare_s"] = outputs.prepare_s;
+    report["refine_s"] = refine.total_s;
+    report["write_s"] = outputs.write_s;
+    report["total_s"] = total_s;
+    report["peak_rss_mib"] = PeakRssMib();
+    report["machine_after"] = MachineJson(after);
+    std::ofstream(args.Require("json")) << report.dump(2) << "\n";
+    std::printf("wrote %s\n", args.Require("json").c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+SATMESH_REGISTER_COMMAND("bench", "benchmark one refinement (stage times, Embree, memory)", RunBench);
+
+}  // namespace satmesh::cli

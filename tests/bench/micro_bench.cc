@@ -1,0 +1,223 @@
+// Micro-benchmarks of the refinement's hot paths (Google Benchmark). Not a ctest test:
+// run build/tests/bench/satmesh_micro_bench by hand (numbers in BENCHMARKS.md).
+// Fixture: a 1024² px view at 0.5 m GSD, 20° off nadir, with a cubic RPC, over a 512 m
+// square of blocky "city" heights meshed at 1 m (0.53 M faces).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/mesh/topology.h"
+#include "core/raycast/ray_scene.h"
+#include "core/refine/photometric_gradient.h"
+#include "core/refine/projection_grid.h"
+#include "core/refine/thin_plate.h"
+#include "core/refine/view_level.h"
+#include "core/refine/zncc.h"
+#include "core/rpc/rpc_model.h"
+
+namespace satmesh {
+namespace {
+
+constexpr int kSizePx = 1024;
+constexpr double kGsdM = 0.5;
+const LocalFrame& Frame() {
+  static const LocalFrame frame(Eigen::Vector3d(5.44, 43.26, 100.0));
+  return frame;
+}
+
+// RPC looking at the frame centre from (off_nadir, azimuth), with small cubic and
+// denominator terms so every monomial of the RFM matters.
+RpcModel ViewRpc(double off_nadir_deg, double azimuth_deg) {
+  const LocalFrame& frame = Frame();
+  RpcCoefficients c;
+  const Eigen::Vector3d center = frame.center_lon_lat_h();
+  c.long_off = center.x(), c.lat_off = center.y(), c.height_off = center.z();
+  c.long_scale = c.lat_scale = 0.005;
+  c.height_scale = 100;
+  c.samp_off = c.line_off = 0.5 * kSizePx - 0.5;
+  c.samp_scale = c.line_scale = 0.5 * kSizePx;
+  const double sx = c.long_scale * frame.meters_per_degree_lon();
+  const double sy = c.lat_scale * frame.meters_per_degree_lat();
+  const double t = std::tan(off_nadir_deg * M_PI / 180), phi = azimuth_deg * M_PI / 180;
+  c.samp_num[1] = sx / kGsdM / c.samp_scale;
+  c.samp_num[3] = -c.height_scale * t * std::sin(phi) / kGsdM / c.samp_scale;
+  c.line_num[2] = -sy / kGsdM / c.line_scale;
+  c.line_num[3] = c.height_scale * t * std::cos(phi) / kGsdM / c.line_scale;
+  for (int k = 4; k < 20; ++k) {
+    c.samp_num[k] = 1e-4 * std::sin(k), c.line_num[k] = 1e-4 * std::cos(k);
+    c.samp_den[k] = 1e-5 * std::cos(3 * k), c.line_den[k] = 1e-5 * std::sin(3 * k);
+  }
+  c.samp_den[0] = c.line_den[0] = 1;
+  c.samp_den[1] = 1e-3, c.line_den[2] = -1e-3;
+  return RpcModel::FromCoefficients(c);
+}
+
+double CityZ(double x, double y) {
+  const double block = (std::sin(x / 23.0) > 0.2 && std::cos(y / 19.0) > 0.1) ? 12.0 : 0.0;
+  return block + 0.5 * std::sin(x / 7.0) * std::cos(y / 5.0);
+}
+
+const TriangleMesh& CityMesh() {
+  static const TriangleMesh mesh = [] {
+    TriangleMesh m;
+    const int n = 513;  // 512 m at 1 m
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) m.vertices.emplace_back(i - 256.f, j - 256.f, float(CityZ(i - 256, j - 256)));
+    for (int j = 0; j + 1 < n; ++j) {
+      for (int i = 0; i + 1 < n; ++i) {
+        const int v00 = j * n + i, v10 = v00 + 1, v01 = v00 + n, v11 = v01 + 1;
+        m.faces.emplace_back(v00, v10, v11);
+        m.faces.emplace_back(v00, v11, v01);
+      }
+    }
+    return m;
+  }();
+  return mesh;
+}
+
+ImageF NoiseImage(uint32_t seed) {
+  ImageF image(kSizePx, kSizePx);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  for (float& p : image.pixels) p = u(rng);
+  return image;
+}
+
+const Eigen::Vector3d kBoxMin(-266, -266, -10), kBoxMax(266, 266, 30);
+
+ViewLevel MakeView(int index, double off_nadir_deg, double azimuth_deg) {
+  return MakeViewLevel(index, 0, NoiseImage(index + 1), ViewRpc(off_nadir_deg, azimuth_deg), Frame(),
+                       kBoxMin, kBoxMax, /*grid_px=*/16);
+}
+
+std::vector<Eigen::Vector3d> RandomLocalPoints(size_t n) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> xy(-250, 250), z(-5, 25);
+  std::vector<Eigen::Vector3d> points(n);
+  for (auto& p : points) p = Eigen::Vector3d(xy(rng), xy(rng), z(rng));
+  return points;
+}
+
+void BM_RpcPixelFromGeo(benchmark::State& state) {
+  const RpcModel rpc = ViewRpc(20, 30);
+  auto points = RandomLocalPoints(4096);
+  for (auto& p : points) p = Frame().GeoFromLocal(p);
+  Eigen::Matrix<double, 2, 3> jacobian;
+  const bool with_jacobian = state.range(0) != 0;
+  size_t i = 0;
+  for (auto _ : state) {
+    const auto& p = points[i++ & 4095];
+    benchmark::DoNotOptimize(with_jacobian ? rpc.PixelFromGeo(p, &jacobian) : rpc.PixelFromGeo(p));
+    benchmark::DoNotOptimize(jacobian);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_RpcPixelFromGeo)->ArgName("jacobian")->Arg(0)->Arg(1);
+
+void BM_RpcLocalizeLonLat(benchmark::State& state) {
+  const RpcModel rpc = ViewRpc(20, 30);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> px(0, kSizePx);
+  std::vector<Eigen::Vector2d> pixels(4096);
+  for (auto& p : pixels) p = Eigen::Vector2d(px(rng), px(rng));
+  size_t i = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(rpc.LocalizeLonLat(pixels[i++ & 4095], 110.0));
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_RpcLocalizeLonLat);
+
+void BM_ProjectionGridPixelFromLocal(benchmark::State& state) {
+  const ProjectionGrid grid(ViewRpc(20, 30), Frame(), kBoxMin, kBoxMax, 16.0, 8.0);
+  const auto points = RandomLocalPoints(4096);
+  Eigen::Matrix<double, 2, 3> jacobian;
+  size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(grid.PixelFromLocal(points[i++ & 4095], &jacobian));
+    benchmark::DoNotOptimize(jacobian);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_ProjectionGridPixelFromLocal);
+
+void BM_ComputeZnccField(benchmark::State& state) {  // 1 Mpx, window (2r+1)²
+  const ImageF a = NoiseImage(1), b = NoiseImage(2);
+  std::vector<uint8_t> valid(a.pixels.size(), 1);
+  for (size_t i = 0; i < valid.size(); i += 7) valid[i] = 0;
+  ZnccOptions options;
+  options.window_radius = int(state.range(0));
+  ZnccWorkspace workspace;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(ComputeZnccField(a.pixels, b.pixels, valid, kSizePx, kSizePx, options, &workspace));
+  state.SetItemsProcessed(state.iterations() * a.pixels.size());
+}
+BENCHMARK(BM_ComputeZnccField)->ArgName("radius")->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond);
+
+void BM_RaySceneIntersect1M(benchmark::State& state) {
+  const RayScene scene(CityMesh());
+  const ViewLevel view = MakeView(0, 20, 30);  // 1024² rays
+  std::vector<RayHit> hits(view.rays.size());
+  for (auto _ : state) scene.Intersect(view.rays.data(), hits.data(), hits.size());
+  state.SetItemsProcessed(state.iterations() * hits.size());
+}
+BENCHMARK(BM_RaySceneIntersect1M)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_RaySceneBuild(benchmark::State& state) {
+  for (auto _ : state) RayScene scene(CityMesh());
+  state.SetItemsProcessed(state.iterations() * CityMesh().num_faces());
+}
+BENCHMARK(BM_RaySceneBuild)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_RaySceneUpdateVertices(benchmark::State& state) {
+  RayScene scene(CityMesh());
+  auto vertices = CityMesh().vertices;
+  for (auto _ : state) {
+    for (auto& v : vertices) v.z() += 1e-3f;
+    scene.UpdateVertices(vertices);
+  }
+}
+BENCHMARK(BM_RaySceneUpdateVertices)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_CastHitMap(benchmark::State& state) {
+  const RayScene scene(CityMesh());
+  ViewLevel view = MakeView(0, 20, 30);
+  for (auto _ : state) CastHitMap(scene, &view);
+  state.SetItemsProcessed(state.iterations() * view.rays.size());
+}
+BENCHMARK(BM_CastHitMap)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_MakeViewLevel(benchmark::State& state) {  // virtual camera + lattice + 1M rays
+  for (auto _ : state) benchmark::DoNotOptimize(MakeView(0, 20, 30));
+}
+BENCHMARK(BM_MakeViewLevel)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_AccumulatePhotometricGradient(benchmark::State& state) {  // one pair-direction
+  const TriangleMesh& mesh = CityMesh();
+  const RayScene scene(mesh);
+  ViewLevel view_i = MakeView(0, 20, 30), view_j = MakeView(1, 15, 60);
+  CastHitMap(scene, &view_i);
+  CastHitMap(scene, &view_j);
+  const auto normals = FaceNormals(mesh);
+  PhotometricOptions options;
+  options.visibility_tolerance_m = 2 * kGsdM;
+  std::vector<Eigen::Vector3d> gradient(mesh.num_vertices(), Eigen::Vector3d::Zero());
+  std::vector<uint8_t> touched(mesh.num_vertices());
+  PairWorkspace workspace;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(AccumulatePhotometricGradient(view_i, view_j, mesh, normals, options,
+                                                           &gradient, &touched, &workspace));
+  state.SetItemsProcessed(state.iterations() * view_i.rays.size());
+}
+BENCHMARK(BM_AccumulatePhotometricGradient)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_UmbrellaSquared(benchmark::State& state) {
+  const VertexAdjacency adjacency = BuildVertexAdjacency(CityMesh());
+  for (auto _ : state) benchmark::DoNotOptimize(UmbrellaSquared(CityMesh().vertices, adjacency));
+  state.SetItemsProcessed(state.iterations() * CityMesh().num_vertices());
+}
+BENCHMARK(BM_UmbrellaSquared)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace satmesh
+
+BENCHMARK_MAIN();
