@@ -1,0 +1,294 @@
+#include "server/api.h"
+
+#include <httplib.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "core/common/error.h"
+#include "proto/job_spec_json.h"
+#include "server/api_documents.h"
+#include "server/problem.h"
+
+namespace satmesh::server {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+void SendJson(httplib::Response& res, const json& body, int status = 200) {
+  res.status = status;
+  res.set_content(body.dump(), "application/json");
+}
+
+void SendProblem(httplib::Response& res, const Problem& p) {
+  res.status = p.status;
+  res.set_content(p.body.dump(), "application/problem+json");
+}
+
+bool ConstantTimeEquals(const std::string& a, const std::string& b) {
+  unsigned diff = unsigned(a.size() ^ b.size());
+  for (size_t i = 0; i < a.size(); ++i) diff |= unsigned(a[i] ^ b[i % (b.empty() ? 1 : b.size())]);
+  return diff == 0 && !b.empty();
+}
+
+std::string ContentType(const std::string& file) {
+  const std::string ext = fs::path(file).extension().string();
+  if (ext == ".glb") return "model/gltf-binary";
+  if (ext == ".json") return "application/json";
+  if (ext == ".tif") return "image/tiff";
+  return "application/octet-stream";
+}
+
+void SendFile(httplib::Response& res, const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  SATMESH_CHECK(in.good(), ErrorCode::kIo, "cannot read '" + path.filename().string() + "'");
+  std::ostringstream data;
+  data << in.rdbuf();
+  res.set_content(data.str(), ContentType(path.string()));
+}
+
+[[noreturn]] void NoSuchJob(const std::string& id) {
+  throw HttpError(404, "no-such-job", "no job with id '" + id + "'");
+}
+
+}  // namespace
+
+std::string ServerOptions::Check() const {
+  if (port < 0 || port > 65535) return "port: " + std::to_string(port) + " not in [0, 65535]";
+  if (data_dir.empty()) return "data_dir: required";
+  if (max_body_bytes < 1024) return "max_body_bytes: must be >= 1024";
+  if (http_threads < 1 || http_threads > 1024) return "http_threads: not in [1, 1024]";
+  if (max_stream_s < 1) return "max_stream_s: must be >= 1";
+  std::string p = inputs.Check();
+  if (!p.empty()) return p;
+  return scheduler.Check();
+}
+
+struct ApiServer::Impl {
+  ServerOptions options;
+  JobExecutor* executor;
+  JobStore store;
+  Scheduler scheduler;
+  httplib::Server http;
+  std::thread listener;
+  json job_schema, openapi;
+
+  Impl(const ServerOptions& o, JobExecutor* e)
+      : options(o), executor(e), store(o.data_dir), scheduler(&store, e, o.scheduler) {}
+
+  JobRecord RequireJob(const std::string& id) const {
+    auto job = scheduler.Get(id);
+    if (!job) NoSuchJob(id);
+    return *job;
+  }
+
+  void Execute(const httplib::Request& req, httplib::Response& res) {
+    const std::string type = req.get_header_value("Content-Type");
+    if (!type.empty() && type.find("json") == std::string::npos)
+      throw HttpError(415, "unsupported-media-type", "Content-Type must be application/json, got '" + type + "'");
+    json body;
+    try {
+      body = json::parse(req.body);
+    } catch (const json::parse_error& e) {
+      throw HttpError(400, "invalid-json", std::string("request body: ") + e.what());
+    }
+    json job = body.is_object() && body.contains("inputs") ? body["inputs"] : body;
+    ResolveHrefs(&job, options.inputs);
+    const JobSpec spec = proto::JobSpecFromJson(job, "/");
+    const std::string problem = spec.Check();
+    if (!problem.empty()) ThrowError(ErrorCode::kInvalidArgument, problem);
+    CheckLimits(spec, {}, options.inputs);
+    const JobPlan plan = executor->Plan(spec);
+    CheckLimits(spec, plan, options.inputs);
+    const std::string key = req.get_header_value("Idempotency-Key");
+    if (key.size() > 256) throw HttpError(400, "bad-request", "Idempotency-Key: longer than 256 characters");
+    bool created = false;
+    const JobRecord record = scheduler.Submit(job, spec, plan, key, &created);
+    if (!created && record.request != job)
+      throw HttpError(422, "idempotency-key-reused", "Idempotency-Key '" + key + "' was used for a different job");
+    res.set_header("Location", "/jobs/" + record.id);
+    res.set_header("Preference-Applied", "respond-async");
+    SendJson(res, StatusInfo(record), created ? 201 : 200);
+  }
+
+  void Results(const std::string& id, httplib::Response& res) const {
+    const JobRecord job = RequireJob(id);
+    if (job.status == JobStatus::kAccepted || job.status == JobStatus::kRunning)
+      throw HttpError(404, "result-not-ready", "job '" + id + "' is " + JobStatusName(job.status));
+    if (job.status == JobStatus::kDismissed) throw HttpError(410, "job-dismissed", "job '" + id + "' was dismissed");
+    if (job.status == JobStatus::kFailed) throw HttpError(422, "job-failed", "job '" + id + "' failed: " + job.message);
+    const fs::path dir = scheduler.JobDir(id);
+    const std::string base = "/jobs/" + id + "/results/";
+    json links = json::array();
+    json out = {{"jobID", id}};
+    for (const char* file : {"tileset.json", "metrics.json", "mesh.ply", "dsm.tif"}) {
+      if (!fs::exists(dir / file)) continue;
+      const std::string name = fs::path(file).stem().string();
+      out[name] = {{"href", base + file}, {"type", ContentType(file)}};
+      links.push_back({{"href", base + file}, {"rel", name}, {"type", ContentType(file)}});
+    }
+    if (fs::exists(dir / "metrics.json")) out["metrics"]["value"] = ReadJsonFile((dir / "metrics.json").string());
+    out["tiles"] = TileList(job)["tiles"];
+    out["links"] = links;
+    SendJson(res, out);
+  }
+
+  void Stream(const std::string& id, httplib::Response& res) {
+    RequireJob(id);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(options.max_stream_s);
+    auto last = std::make_shared<uint64_t>(UINT64_MAX);
+    res.set_header("Cache-Control", "no-cache");
+    res.set_chunked_content_provider(
+        "text/event-stream", [this, id, deadline, last](size_t, httplib::DataSink& sink) {
+          if (*last != UINT64_MAX) *last = scheduler.WaitForChange(*last, 1000);
+          else *last = scheduler.version();
+          const auto job = scheduler.Get(id);
+          if (!job) return false;
+          const std::string event = "event: status\ndata: " + StatusInfo(*job).dump() + "\n\n";
+          if (!sink.write(event.data(), event.size())) return false;
+          if (IsTerminal(job->status) || std::chrono::steady_clock::now() > deadline) sink.done();
+          return true;
+        });
+  }
+
+  void Routes() {
+    http.Get("/", [](const auto&, auto& res) { SendJson(res, LandingPage()); });
+    http.Get("/conformance", [](const auto&, auto& res) { SendJson(res, Conformance()); });
+    http.Get("/api", [this](const auto&, auto& res) { SendJson(res, openapi); });
+    http.Get("/health", [this](const auto&, auto& res) {
+      const auto s = scheduler.Stats();
+      SendJson(res, {{"status", "ok"}, {"workers", options.scheduler.workers},
+                     {"tiles_queued", s.tiles_queued}, {"tiles_running", s.tiles_running}});
+    });
+    http.Get("/metrics", [this](const auto&, auto& res) {
+      res.set_content(PrometheusText(scheduler.Stats()), "text/plain; version=0.0.4");
+    });
+    http.Get("/processes", [](const auto&, auto& res) {
+      SendJson(res, {{"processes", json::array({ProcessSummary()})},
+                     {"links", json::array({{{"href", "/processes"}, {"rel", "self"}}})}});
+    });
+    http.Get(R"(/processes/([^/]+))", [this](const auto& req, auto& res) {
+      if (req.matches[1] != kProcessId)
+        throw HttpError(404, "no-such-process", "no process '" + std::string(req.matches[1]) + "'");
+      SendJson(res, ProcessDescription(job_schema));
+    });
+    http.Post(R"(/processes/([^/]+)/execution)", [this](const auto& req, auto& res) {
+      if (req.matches[1] != kProcessId)
+        throw HttpError(404, "no-such-process", "no process '" + std::string(req.matches[1]) + "'");
+      Execute(req, res);
+    });
+    http.Get("/jobs", [this](const auto& req, auto& res) {
+      std::optional<JobStatus> status;
+      if (req.has_param("status")) status = JobStatusFromName(req.get_param_value("status"));
+      size_t limit = 100;
+      if (req.has_param("limit")) {
+        const std::string v = req.get_param_value("limit");
+        if (v.empty() || v.size() > 6 || v.find_first_not_of("0123456789") != std::string::npos || std::stoul(v) < 1)
+          throw HttpError(400, "bad-request", "limit: '" + v + "' is not an integer in [1, 999999]");
+        limit = std::stoul(v);
+      }
+      json jobs = json::array();
+      for (const auto& job : scheduler.List(status, limit)) jobs.push_back(StatusInfo(job));
+      SendJson(res, {{"jobs", jobs}, {"links", json::array({{{"href", "/jobs"}, {"rel", "self"}}})}});
+    });
+    http.Get(R"(/jobs/([^/]+))", [this](const auto& req, auto& res) {
+      SendJson(res, StatusInfo(RequireJob(req.matches[1])));
+    });
+    http.Delete(R"(/jobs/([^/]+))", [this](const auto& req, auto& res) {
+      const auto job = scheduler.Dismiss(req.matches[1]);
+      if (!job) NoSuchJob(req.matches[1]);
+      SendJson(res, StatusInfo(*job));
+    });
+    http.Get(R"(/jobs/([^/]+)/tiles)", [this](const auto& req, auto& res) {
+      SendJson(res, TileList(RequireJob(req.matches[1])));
+    });
+    http.Get(R"(/jobs/([^/]+)(?:/results)?/tiles/(\d{1,6})_(\d{1,6})\.glb)", [this](const auto& req, auto& res) {
+      const JobRecord job = RequireJob(req.matches[1]);
+      const TileKey key{std::stoi(req.matches[2]), std::stoi(req.matches[3])};
+      for (const auto& t : job.tiles) {
+        if (!(t.key == key)) continue;
+        if (t.status != TileStatus::kDone || job.status == JobStatus::kDismissed)
+          throw HttpError(404, "result-not-ready", "tile " + key.Name() + " is " + TileStatusName(t.status));
+        return SendFile(res, fs::path(scheduler.JobDir(job.id)) / "tiles" / (key.Name() + ".glb"));
+      }
+      throw HttpError(404, "no-such-tile", "job '" + job.id + "' has no tile " + key.Name());
+    });
+    http.Get(R"(/jobs/([^/]+)/results)", [this](const auto& req, auto& res) { Results(req.matches[1], res); });
+    http.Get(R"(/jobs/([^/]+)/results/(tileset\.json|metrics\.json|mesh\.ply|dsm\.tif))",
+             [this](const auto& req, auto& res) {
+               const JobRecord job = RequireJob(req.matches[1]);
+               if (job.status != JobStatus::kSuccessful)
+                 throw HttpError(404, "result-not-ready", "job '" + job.id + "' is " + JobStatusName(job.status));
+               const fs::path file = fs::path(scheduler.JobDir(job.id)) / std::string(req.matches[2]);
+               if (!fs::exists(file)) throw HttpError(404, "not-found", "job '" + job.id + "' has no " + file.filename().string());
+               SendFile(res, file);
+             });
+    http.Get(R"(/jobs/([^/]+)/events)", [this](const auto& req, auto& res) { Stream(req.matches[1], res); });
+  }
+
+  void Hooks() {
+    http.set_payload_max_length(options.max_body_bytes);
+    http.new_task_queue = [n = options.http_threads] { return new httplib::ThreadPool(size_t(n)); };
+    http.set_exception_handler([](const httplib::Request& req, httplib::Response& res, std::exception_ptr error) {
+      const Problem p = ProblemFromException(error);
+      if (p.status >= 500) spdlog::error("{} {}: {}", req.method, req.path, p.body["detail"].get<std::string>());
+      SendProblem(res, p);
+    });
+    http.set_error_handler(httplib::Server::HandlerWithResponse([](const httplib::Request& req, httplib::Response& res) {
+      if (res.body.empty())
+        SendProblem(res, ProblemForStatus(res.status, req.method + " " + req.path + ": HTTP " + std::to_string(res.status)));
+      return httplib::Server::HandlerResponse::Handled;
+    }));
+    http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+      if (options.token.empty() || req.path == "/health") return httplib::Server::HandlerResponse::Unhandled;
+      const std::string auth = req.get_header_value("Authorization");
+      const std::string prefix = "Bearer ";
+      if (auth.rfind(prefix, 0) == 0 && ConstantTimeEquals(auth.substr(prefix.size()), options.token))
+        return httplib::Server::HandlerResponse::Unhandled;
+      res.set_header("WWW-Authenticate", "Bearer");
+      SendProblem(res, {401, {{"type", ProblemTypeUri("unauthorized")}, {"title", "Unauthorized"},
+                              {"status", 401}, {"detail", "a valid bearer token is required"}}});
+      return httplib::Server::HandlerResponse::Handled;
+    });
+  }
+};
+
+ApiServer::ApiServer(const ServerOptions& options, JobExecutor* executor)
+    : impl_(std::make_unique<Impl>(options, executor)) {
+  const std::string problem = options.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "server options: " + problem);
+  const std::string proto = options.proto_dir.empty() ? SATMESH_PROTO_DIR : options.proto_dir;
+  impl_->job_schema = ReadJsonFile(proto + "/job.schema.json");
+  impl_->openapi = ReadJsonFile(proto + "/openapi.json");
+}
+
+ApiServer::~ApiServer() { Stop(); }
+
+int ApiServer::Start() {
+  impl_->Routes();
+  impl_->Hooks();
+  impl_->scheduler.Start();
+  const auto& o = impl_->options;
+  const int port = o.port == 0 ? impl_->http.bind_to_any_port(o.host) : (impl_->http.bind_to_port(o.host, o.port) ? o.port : -1);
+  if (port < 0) {
+    impl_->scheduler.Stop();
+    ThrowError(ErrorCode::kIo, "cannot listen on " + o.host + ":" + std::to_string(o.port));
+  }
+  impl_->listener = std::thread([this] { impl_->http.listen_after_bind(); });
+  spdlog::info("satmesh-server listening on http://{}:{} (data: {}, {} worker(s))", o.host, port,
+               o.data_dir, o.scheduler.workers);
+  return port;
+}
+
+void ApiServer::Stop() {
+  impl_->http.stop();
+  if (impl_->listener.joinable()) impl_->listener.join();
+  impl_->scheduler.Stop();
+}
+
+}  // namespace satmesh::server

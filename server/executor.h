@@ -1,0 +1,41 @@
+#pragma once
+// The engine behind the HTTP layer (OSRM style): handlers and the scheduler depend on this
+// interface only, so tests can plug in a stub and exercise HTTP without refinement.
+// Cancellation and progress arrive explicitly through Progress.
+#include <nlohmann/json.hpp>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/common/progress.h"
+#include "core/tiling/job.h"
+
+namespace satmesh::server {
+
+struct TileKey {
+  int x = 0, y = 0;  // tile column, row in the job's tile grid, >= 0
+  std::string Name() const { return std::to_string(x) + "_" + std::to_string(y); }
+  bool operator==(const TileKey&) const = default;
+};
+
+struct JobPlan {
+  std::vector<TileKey> tiles;  // in processing order
+  int64_t pixels = 0;          // total image pixels the job reads (limits)
+};
+
+class JobExecutor {
+ public:
+  virtual ~JobExecutor() = default;
+  // Checks the inputs (throws Error naming the field/file) and splits the job into tiles.
+  virtual JobPlan Plan(const JobSpec& spec) = 0;
+  // Refines one tile; writes job_dir/tiles/<x>_<y>.glb (and any per-tile work files).
+  // Throws Error{kCancelled} when progress.Cancelled() turns true.
+  virtual void RunTile(const JobSpec& spec, const TileKey& tile, const std::string& job_dir,
+                       const Progress& progress) = 0;
+  // After every tile is done: writes job_dir/tileset.json, metrics.json (and mesh.ply,
+  // dsm.tif where the engine makes them); returns the metrics.
+  virtual nlohmann::json Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
+                                  const std::string& job_dir) = 0;
+};
+
+}  // namespace satmesh::server

@@ -1,0 +1,32 @@
+#pragma once
+// What a job may reference and how much it may ask for: hrefs only under the operator's
+// data roots (no "..", no symlink escapes) or GDAL virtual paths the operator allows,
+// and limits on images, tiles and pixels per job.
+#include <nlohmann/json.hpp>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "server/executor.h"
+
+namespace satmesh::server {
+
+struct InputPolicy {
+  std::vector<std::string> data_roots;  // directories inputs may come from; relative hrefs resolve against the first
+  std::vector<std::string> allowed_vsi; // GDAL virtual path prefixes allowed, e.g. "/vsicurl/"; empty = none
+  int max_images = 64;                  // images per job, >= 2
+  int max_tiles = 1024;                 // tiles per job, >= 1
+  int64_t max_pixels = 4'000'000'000;   // total image pixels per job, >= 1
+  std::string Check() const;
+};
+
+// Rewrites every href of the job (images[i].href, initial.dsm) to an absolute, resolved
+// path. Throws HttpError 403 for a path outside the roots (or a virtual path not allowed)
+// and Error{kInvalidArgument} naming the field for a file that does not exist. Fields of
+// the wrong shape are left for the job parser to name.
+void ResolveHrefs(nlohmann::json* job, const InputPolicy& policy);
+
+// Throws Error{kInvalidArgument} naming the limit a planned job exceeds.
+void CheckLimits(const JobSpec& spec, const JobPlan& plan, const InputPolicy& policy);
+
+}  // namespace satmesh::server

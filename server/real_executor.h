@@ -1,0 +1,25 @@
+#pragma once
+// The production engine: the core tiling runner behind the JobExecutor interface.
+#include "server/executor.h"
+
+namespace satmesh::server {
+
+// Today one tile per job (core RunJob); writes per tile job_dir/work/<tile>/ (mesh.ply,
+// dsm.tif, metrics.json) and job_dir/tiles/<tile>.glb (Draco); Assemble writes
+// tileset.json (3D Tiles 1.1), metrics.json, mesh.ply and dsm.tif into job_dir.
+class RealExecutor : public JobExecutor {
+ public:
+  JobPlan Plan(const JobSpec& spec) override;
+  void RunTile(const JobSpec& spec, const TileKey& tile, const std::string& job_dir,
+               const Progress& progress) override;
+  nlohmann::json Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
+                          const std::string& job_dir) override;
+};
+
+// Writes a minimal 3D Tiles 1.1 tileset.json listing tiles/<x>_<y>.glb under one root,
+// bounding boxes from the glbs (tile-local positions). Shared with test engines.
+void WriteTileset(const std::string& job_dir, const std::vector<TileKey>& tiles);
+// Writes text to path through a temporary file and a rename.
+void WriteFileAtomic(const std::string& path, const std::string& text);
+
+}  // namespace satmesh::server

@@ -1,0 +1,89 @@
+#pragma once
+// The worker pool: runs the tiles of all jobs, round-robin between jobs so one big job
+// does not starve the others; cancellation reaches a running tile through its Progress.
+// State changes are persisted through the JobStore (outside the lock readers take).
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include "server/executor.h"
+#include "server/store.h"
+
+namespace satmesh::server {
+
+struct SchedulerOptions {
+  int workers = 2;  // tile worker threads, in [1, 256]
+  std::string Check() const;
+};
+
+struct SchedulerStats {
+  int tiles_queued = 0, tiles_running = 0;   // now
+  int64_t tiles_done = 0, tiles_failed = 0;  // since start
+  std::map<std::string, int> jobs_by_status;
+  std::vector<double> duration_buckets_s;    // histogram upper bounds (+Inf implied)
+  std::vector<int64_t> duration_counts;      // cumulative, one more than buckets (+Inf)
+  double duration_sum_s = 0;
+};
+
+class Scheduler {
+ public:
+  Scheduler(JobStore* store, JobExecutor* executor, const SchedulerOptions& options);
+  ~Scheduler();
+  // Loads the store's jobs (unfinished tiles go back to the queue) and starts the workers.
+  void Start();
+  // Stops the workers; running tiles are cancelled and stay queued for the next start.
+  void Stop();
+
+  // Adds a validated, planned job. With a non-empty idempotency key already used, returns
+  // that job instead and sets *created = false.
+  JobRecord Submit(const nlohmann::json& request, const JobSpec& spec, const JobPlan& plan,
+                   const std::string& idempotency_key, bool* created);
+  std::optional<JobRecord> Get(const std::string& id) const;
+  // Newest first; status filter optional; at most `limit`.
+  std::vector<JobRecord> List(std::optional<JobStatus> status, size_t limit) const;
+  // Cancels the job's tiles and marks it dismissed; std::nullopt for an unknown id.
+  std::optional<JobRecord> Dismiss(const std::string& id);
+  // Blocks until the job changes after `version` or the timeout passes; returns the
+  // current change counter (for progress streams).
+  uint64_t WaitForChange(uint64_t version, int timeout_ms) const;
+  uint64_t version() const;
+  SchedulerStats Stats() const;
+  std::string JobDir(const std::string& id) const { return store_->JobDir(id); }
+
+ private:
+  struct Entry {
+    JobRecord record;
+    JobSpec spec;
+    std::shared_ptr<std::atomic<bool>> cancel = std::make_shared<std::atomic<bool>>(false);
+    int running = 0;
+    bool assembling = false;
+  };
+  void WorkerLoop();
+  void RunOneTile(const std::string& id, size_t tile_index);
+  void AssembleJob(const std::string& id);
+  void Persist(const std::string& id);
+  void Touch(Entry* e);  // updated timestamp + change counter (mu_ held)
+
+  JobStore* store_;
+  JobExecutor* executor_;
+  SchedulerOptions options_;
+  mutable std::mutex mu_;
+  mutable std::condition_variable work_cv_, change_cv_;
+  std::mutex save_mu_;  // serialises state writes so they land in order
+  std::map<std::string, Entry> jobs_;
+  std::deque<std::string> ready_;  // jobs with work, round robin
+  std::vector<std::thread> workers_;
+  std::atomic<bool> stopping_{false};
+  uint64_t version_ = 0;
+  int64_t tiles_done_ = 0, tiles_failed_ = 0;
+  std::vector<int64_t> duration_counts_;
+  double duration_sum_s_ = 0;
+};
+
+}  // namespace satmesh::server
