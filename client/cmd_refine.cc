@@ -13,20 +13,40 @@ int RunRefine(const std::vector<std::string>& argv) {
   if (args.Has("help") || args.positionals().size() != 1) {
     std::printf(
         "usage: satmesh refine JOB.json --out DIR [--set key=value ...]\n"
-        "  Refines the job's initial surface; writes DIR/mesh.ply, DIR/dsm.tif, DIR/metrics.json.\n"
-        "  --set overrides an option of proto/job.schema.json (e.g. --set levels=2).\n");
+        "  Refines the job's initial surface tile by tile; writes DIR/mesh.ply, DIR/dsm.tif,\n"
+        "  DIR/tiles/<x>_<y>.glb, DIR/tileset.json and DIR/metrics.json.\n"
+        "  --set overrides an option of proto/job.schema.json (e.g. --set levels=2,\n"
+        "  --set tiling.size_m=100 --set tiling.workers=2).\n");
     return args.Has("help") ? kExitOk : kExitUsage;
   }
   const auto outputs = RunJobFile(args.positionals()[0], args.Require("out"), args.GetAll("set"));
   for (const auto& level : outputs.refine.levels) {
+    if (level.mean_zncc.empty()) continue;
     std::printf("level %d: %7d faces  mean ZNCC %.4f -> %.4f  (%.1f s)\n", level.level,
                 level.num_faces, level.mean_zncc.front(), level.mean_zncc.back(), level.level_s);
   }
-  return kExitOk;
+  for (const auto& tile : outputs.tiles) {
+    if (!tile.ok) {
+      std::printf("tile %-7s FAILED: %s\n", tile.name.c_str(), tile.error.c_str());
+      continue;
+    }
+    const auto& last = tile.refine.levels.back();
+    std::printf("tile %-7s %2zu views  %8zu faces  ZNCC %.4f -> %.4f  %.1f s  %.0f MB images\n",
+                tile.name.c_str(), tile.view_names.size(), tile.core_faces,
+                tile.refine.levels.front().mean_zncc.front(),
+                last.mean_zncc.empty() ? 0.0 : last.mean_zncc.back(), tile.refine_s, tile.image_mb);
+  }
+  const auto& seams = outputs.assembly.seams_total;
+  if (seams.cells > 0)
+    std::printf("seams: %d cells, |step| median %.3f m, p95 %.3f m, max %.3f m\n", seams.cells,
+                seams.median_abs_m, seams.p95_abs_m, seams.max_abs_m);
+  std::printf("%d/%zu tiles ok, %d workers, %.1f s, peak RSS %.0f MB\n", outputs.assembly.tiles_ok,
+              outputs.tiles.size(), outputs.workers, outputs.total_s, outputs.peak_rss_mb);
+  return outputs.assembly.tiles_failed == 0 ? kExitOk : kExitFailure;
 }
 
 }  // namespace
 
-SATMESH_REGISTER_COMMAND("refine", "refine a job's surface (in-process)", RunRefine);
+SATMESH_REGISTER_COMMAND("refine", "refine a job's surface (in-process, tiled)", RunRefine);
 
 }  // namespace satmesh::cli

@@ -31,9 +31,9 @@ JobOutputs RunJobFile(const std::string& job_path, const std::string& out_dir,
     if (fraction >= 1.0) std::fprintf(stderr, "\n");
   };
   JobOutputs outputs = RunJob(spec, out_dir, progress);
-  const auto metrics_path = std::filesystem::path(out_dir) / "metrics.json";
-  std::ofstream(metrics_path) << proto::RefineMetricsToJson(outputs).dump(2) << "\n";
-  spdlog::info("wrote {}, {}, {}", outputs.mesh_path, outputs.dsm_path, metrics_path.string());
+  proto::WriteJobJson(outputs, out_dir);
+  spdlog::info("wrote {}, {}, {}/tileset.json, {}/metrics.json, {}/tiles/", outputs.mesh_path,
+               outputs.dsm_path, out_dir, out_dir, out_dir);
   return outputs;
 }
 

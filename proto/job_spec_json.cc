@@ -82,11 +82,46 @@ void ParseOptions(const json& o, RefineOptions* r) {
   if (!problem.empty()) Bad("options", problem);
 }
 
+Eigen::Vector2d Point(const json& j, const std::string& path) {
+  if (!j.is_array() || j.size() != 2) Bad(path, "expected [x, y]");
+  return {Number(j[0], path + "[0]"), Number(j[1], path + "[1]")};
+}
+
+void ParseAoi(const json& a, JobAoi* aoi) {
+  Object(a, "aoi");
+  CheckKeys(a, "aoi", {"bbox", "polygon", "crs"});
+  if (a.contains("bbox") == a.contains("polygon")) Bad("aoi", "give exactly one of bbox, polygon");
+  if (a.contains("bbox")) {
+    const json& b = a["bbox"];
+    if (!b.is_array() || b.size() != 4) Bad("aoi.bbox", "expected [xmin, ymin, xmax, ymax]");
+    double v[4];
+    for (int k = 0; k < 4; ++k) v[k] = Number(b[k], "aoi.bbox[" + std::to_string(k) + "]");
+    if (!(v[0] < v[2] && v[1] < v[3])) Bad("aoi.bbox", "expected xmin < xmax and ymin < ymax");
+    aoi->polygon = {{v[0], v[1]}, {v[2], v[1]}, {v[2], v[3]}, {v[0], v[3]}};
+  } else {
+    const json& p = a["polygon"];
+    if (!p.is_array() || p.size() < 3) Bad("aoi.polygon", "expected >= 3 points [x, y]");
+    for (size_t i = 0; i < p.size(); ++i)
+      aoi->polygon.push_back(Point(p[i], "aoi.polygon[" + std::to_string(i) + "]"));
+  }
+  if (a.contains("crs")) aoi->crs = String(a["crs"], "aoi.crs");
+}
+
+void ParseTiling(const json& t, TilingOptions* tiling) {
+  Object(t, "tiling");
+  CheckKeys(t, "tiling", {"size_m", "overlap_m", "workers"});
+  if (t.contains("size_m")) tiling->tile_size_m = Number(t["size_m"], "tiling.size_m");
+  if (t.contains("overlap_m")) tiling->overlap_m = Number(t["overlap_m"], "tiling.overlap_m");
+  if (t.contains("workers")) tiling->workers = Integer(t["workers"], "tiling.workers");
+  const std::string problem = tiling->Check();
+  if (!problem.empty()) Bad("tiling", problem);
+}
+
 }  // namespace
 
 JobSpec JobSpecFromJson(const json& job, const std::string& base_dir) {
   Object(job, "job");
-  CheckKeys(job, "", {"images", "initial", "outputs", "options"});
+  CheckKeys(job, "", {"images", "initial", "outputs", "options", "aoi", "tiling"});
   JobSpec spec;
   if (!job.contains("images")) Bad("images", "required");
   const json& images = job["images"];
@@ -116,7 +151,11 @@ JobSpec JobSpecFromJson(const json& job, const std::string& base_dir) {
     CheckKeys(job["outputs"], "outputs", {"crs"});
     if (job["outputs"].contains("crs")) spec.output_crs = String(job["outputs"]["crs"], "outputs.crs");
   }
+  if (job.contains("aoi")) ParseAoi(job["aoi"], &spec.aoi);
+  if (job.contains("tiling")) ParseTiling(job["tiling"], &spec.tiling);
   if (job.contains("options")) ParseOptions(job["options"], &spec.refine);
+  const std::string problem = spec.Check();
+  if (!problem.empty()) Bad("job", problem);
   return spec;
 }
 
@@ -143,35 +182,142 @@ void ApplyOptionOverride(json* job, const std::string& key_equals_value) {
   } catch (const json::parse_error&) {
     parsed = value;
   }
-  (*job)["options"][key] = parsed;
+  const auto dot = key.find('.');
+  if (dot == std::string::npos) {
+    (*job)["options"][key] = parsed;  // a refinement option
+  } else {
+    (*job)[key.substr(0, dot)][key.substr(dot + 1)] = parsed;  // e.g. tiling.size_m
+  }
 }
 
-json RefineMetricsToJson(const JobOutputs& outputs) {
-  const RefineResult& r = outputs.refine;
-  json levels = json::array();
-  for (const auto& l : r.levels) {
-    levels.push_back({{"level", l.level},
-                      {"iterations", l.iterations},
-                      {"gsd_m", l.gsd_m},
-                      {"vertices", l.num_vertices},
-                      {"faces", l.num_faces},
-                      {"mean_zncc", l.mean_zncc},
-                      {"mean_zncc_start", l.mean_zncc.empty() ? 0.0 : l.mean_zncc.front()},
-                      {"mean_zncc_end", l.mean_zncc.empty() ? 0.0 : l.mean_zncc.back()},
-                      {"time_s", {{"raycast", l.times.raycast_s},
-                                  {"gradient", l.times.gradient_s},
-                                  {"smoothness", l.times.smoothness_s},
-                                  {"update", l.times.update_s},
-                                  {"level", l.level_s}}}});
+namespace {
+
+json Array(const auto& values) {
+  json a = json::array();
+  for (const auto& v : values) a.push_back(v);
+  return a;
+}
+
+json LevelsToJson(const std::vector<LevelStats>& levels) {
+  json out = json::array();
+  for (const auto& l : levels) {
+    out.push_back({{"level", l.level},
+                   {"iterations", l.iterations},
+                   {"gsd_m", l.gsd_m},
+                   {"vertices", l.num_vertices},
+                   {"faces", l.num_faces},
+                   {"mean_zncc", l.mean_zncc},
+                   {"mean_zncc_start", l.mean_zncc.empty() ? 0.0 : l.mean_zncc.front()},
+                   {"mean_zncc_end", l.mean_zncc.empty() ? 0.0 : l.mean_zncc.back()},
+                   {"time_s", {{"raycast", l.times.raycast_s},
+                               {"gradient", l.times.gradient_s},
+                               {"smoothness", l.times.smoothness_s},
+                               {"update", l.times.update_s},
+                               {"level", l.level_s}}}});
   }
+  return out;
+}
+
+json BoxToJson(const Box2d& b) { return {b.xmin, b.ymin, b.xmax, b.ymax}; }
+
+json SeamToJson(const SeamStats& s) {
+  return {{"a", s.a}, {"b", s.b}, {"cells", s.cells}, {"median_abs_m", s.median_abs_m},
+          {"p95_abs_m", s.p95_abs_m}, {"max_abs_m", s.max_abs_m}, {"mean_m", s.mean_m}};
+}
+
+void WriteJsonAtomically(const std::filesystem::path& path, const json& j) {
+  const auto tmp = path.string() + ".part";
+  {
+    std::ofstream out(tmp);
+    SATMESH_CHECK(out.good(), ErrorCode::kIo, "cannot write '" + tmp + "'");
+    out << j.dump(2) << "\n";
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+}  // namespace
+
+json TileResultToJson(const JobPlan& plan, const TileResult& t) {
+  const PlannedTile& p = plan.tiles.at(t.index);
+  json j = {{"name", p.Name()}, {"x", p.x}, {"y", p.y}, {"status", t.ok ? "successful" : "failed"},
+            {"core_extent", BoxToJson(p.core)}, {"padded_extent", BoxToJson(p.padded)}};
+  if (!t.ok) {
+    j["error"] = {{"code", ErrorCodeName(t.error_code)}, {"message", t.error}};
+    return j;
+  }
+  j["content"] = TileGlbPath(p);
+  j["views"] = t.view_names;
+  j["dropped_views"] = t.dropped_views;
+  j["pairs"] = t.refine.pairs.size();
+  j["vertices"] = t.core_vertices;
+  j["faces"] = t.core_faces;
+  j["image_mb"] = t.image_mb;
+  j["peak_rss_mb"] = t.peak_rss_mb;
+  j["levels"] = LevelsToJson(t.refine.levels);
+  j["time_s"] = {{"prepare", t.prepare_s}, {"refine", t.refine_s}, {"write", t.write_s}};
+  return j;
+}
+
+json TilesetToJson(const Tileset& ts) {
+  json children = json::array();
+  for (const auto& t : ts.tiles) {
+    children.push_back({{"boundingVolume", {{"region", Array(t.region)}}},
+                        {"geometricError", t.geometric_error},
+                        {"transform", Array(t.transform)},
+                        {"content", {{"uri", t.uri}}}});
+  }
+  json root = {{"boundingVolume", {{"region", Array(ts.region)}}},
+               {"geometricError", ts.geometric_error},
+               {"refine", "ADD"},
+               {"children", children}};
+  return {{"asset", {{"version", "1.1"}, {"generator", "satmesh"}}},
+          {"geometricError", ts.geometric_error},
+          {"root", root}};
+}
+
+json JobMetricsToJson(const JobOutputs& o) {
+  json tiles = json::array();
+  double refine_s = 0, max_image_mb = 0;
+  for (const auto& t : o.tiles) {
+    tiles.push_back(TileResultToJson(o.plan, t));
+    refine_s += t.refine_s;
+    max_image_mb = std::max(max_image_mb, t.image_mb);
+  }
+  json seams = json::array();
+  for (const auto& s : o.assembly.seams) seams.push_back(SeamToJson(s));
   json pairs = json::array();
-  for (const auto& [i, j] : r.pairs) pairs.push_back({i, j});
-  return {{"views", outputs.view_names},
+  for (const auto& [i, j] : o.refine.pairs) pairs.push_back({i, j});
+  const double cell = o.plan.dsm.geo_transform[1];
+  return {{"views", o.view_names},  // single-tile jobs (as before tiling)
           {"pairs", pairs},
-          {"gsd_m", r.gsd_m},
-          {"levels", levels},
-          {"time_s", {{"prepare", outputs.prepare_s}, {"refine", r.total_s}, {"write", outputs.write_s}}},
-          {"outputs", {{"mesh", "mesh.ply"}, {"dsm", "dsm.tif"}}}};
+          {"gsd_m", o.refine.gsd_m},
+          {"levels", LevelsToJson(o.refine.levels)},
+          {"tiling", {{"grid", {o.plan.nx, o.plan.ny}},
+                      {"cell_m", cell},
+                      {"tile_m", o.plan.tile_cells * cell},
+                      {"overlap_m", o.plan.overlap_cells * cell},
+                      {"workers", o.workers}}},
+          {"tiles", tiles},
+          {"seams", seams},
+          {"seams_total", SeamToJson(o.assembly.seams_total)},
+          {"totals", {{"tiles", o.tiles.size()},
+                      {"successful", o.assembly.tiles_ok},
+                      {"failed", o.assembly.tiles_failed},
+                      {"vertices", o.assembly.vertices},
+                      {"faces", o.assembly.faces},
+                      {"max_tile_image_mb", max_image_mb},
+                      {"peak_rss_mb", o.peak_rss_mb}}},
+          {"time_s", {{"plan", o.plan_s}, {"tiles", o.tiles_s}, {"prepare", o.prepare_s},
+                      {"refine", refine_s}, {"write", o.write_s}, {"total", o.total_s}}},
+          {"outputs", {{"mesh", "mesh.ply"}, {"dsm", "dsm.tif"}, {"tileset", "tileset.json"},
+                       {"metrics", "metrics.json"}, {"tiles", "tiles/"}}}};
+}
+
+json RefineMetricsToJson(const JobOutputs& outputs) { return JobMetricsToJson(outputs); }
+
+void WriteJobJson(const JobOutputs& outputs, const std::string& out_dir) {
+  WriteJsonAtomically(std::filesystem::path(out_dir) / "tileset.json", TilesetToJson(outputs.assembly.tileset));
+  WriteJsonAtomically(std::filesystem::path(out_dir) / "metrics.json", JobMetricsToJson(outputs));
 }
 
 }  // namespace satmesh::proto

@@ -1,6 +1,6 @@
 #pragma once
-// The job spec's wire format (proto/job.schema.json) <-> core JobSpec, and the refine
-// metrics as JSON. Shared by the CLI and the server; the core stays JSON-free.
+// The job spec's wire format (proto/job.schema.json) <-> core JobSpec, and the job's
+// outputs (metrics.json, tileset.json) as JSON. Shared by the CLI and the server; the core stays JSON-free.
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -14,9 +14,17 @@ namespace satmesh::proto {
 JobSpec JobSpecFromJson(const nlohmann::json& job, const std::string& base_dir);
 // Reads and parses a job file; hrefs relative to its directory.
 JobSpec ReadJobFile(const std::string& path);
-// Applies "key=value" overrides to job["options"] (value parsed as JSON, else string).
+// Applies a "key=value" override (value parsed as JSON, else a string): "levels=2" sets
+// options.levels, "tiling.size_m=100" sets job["tiling"]["size_m"].
 void ApplyOptionOverride(nlohmann::json* job, const std::string& key_equals_value);
 
-nlohmann::json RefineMetricsToJson(const JobOutputs& outputs);
+// Outputs (core structs -> JSON). metrics.json: per tile and totals (+ the single-tile
+// refinement stats at top level, as before tiling). tileset.json: 3D Tiles 1.1.
+nlohmann::json TileResultToJson(const JobPlan& plan, const TileResult& tile);
+nlohmann::json TilesetToJson(const Tileset& tileset);
+nlohmann::json JobMetricsToJson(const JobOutputs& outputs);
+nlohmann::json RefineMetricsToJson(const JobOutputs& outputs);  // = JobMetricsToJson
+// Writes out_dir/tileset.json and out_dir/metrics.json (each atomically).
+void WriteJobJson(const JobOutputs& outputs, const std::string& out_dir);
 
 }  // namespace satmesh::proto

@@ -1,16 +1,16 @@
 #include "core/tiling/job.h"
 
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
-#include <cmath>
 #include <filesystem>
+#include <mutex>
+#include <thread>
 
 #include "core/common/error.h"
-#include "core/dsm/dsm.h"
-#include "core/geo/crs.h"
-#include "core/mesh/mesh_io.h"
-#include "core/tiling/tile_input.h"
 
 namespace satmesh {
 namespace {
@@ -20,23 +20,28 @@ double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
-// The refined mesh from the local frame into `crs`, origin at its rounded centroid.
-TriangleMesh MeshInCrs(const TriangleMesh& local, const LocalFrame& frame, const std::string& crs) {
-  std::vector<Eigen::Vector3d> points(local.vertices.size());
-  for (size_t i = 0; i < points.size(); ++i)
-    points[i] = frame.GeoFromLocal(local.vertices[i].cast<double>());
-  CrsTransform(kWgs84Geographic3D, crs).Apply(&points);
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const auto& p : points) centroid += p;
-  centroid /= std::max<size_t>(1, points.size());
-  TriangleMesh out;
-  out.origin = centroid.array().round().matrix();
-  out.crs = crs;
-  out.faces = local.faces;
-  out.vertices.resize(points.size());
-  for (size_t i = 0; i < points.size(); ++i) out.vertices[i] = (points[i] - out.origin).cast<float>();
-  return out;
-}
+// Overall progress over tiles refined in parallel: the mean of their fractions.
+class PoolProgress {
+ public:
+  PoolProgress(const Progress& outer, size_t tiles) : outer_(outer), fractions_(tiles, 0.0) {}
+  Progress ForTile(size_t index, const std::string& name) {
+    Progress p;
+    p.is_cancelled = outer_.is_cancelled;
+    p.on_progress = [this, index, name](double fraction, const std::string& stage) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      fractions_[index] = fraction;
+      double sum = 0;
+      for (double f : fractions_) sum += f;
+      outer_.Report(sum / double(fractions_.size()), "tile " + name + ": " + stage);
+    };
+    return p;
+  }
+
+ private:
+  const Progress& outer_;
+  std::mutex mutex_;
+  std::vector<double> fractions_;
+};
 
 }  // namespace
 
@@ -45,38 +50,69 @@ std::string JobSpec::Check() const {
   for (size_t i = 0; i < images.size(); ++i)
     if (images[i].path.empty()) return "images[" + std::to_string(i) + "].href is empty";
   if (initial_dsm.empty()) return "initial.dsm is required";
+  if (!aoi.polygon.empty() && aoi.polygon.size() < 3)
+    return "aoi: a polygon needs >= 3 points, got " + std::to_string(aoi.polygon.size());
+  const std::string tiling_problem = tiling.Check();
+  if (!tiling_problem.empty()) return tiling_problem;
   const std::string refine_problem = refine.Check();
   if (!refine_problem.empty()) return "options." + refine_problem;
   return "";
 }
 
 JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progress& progress) {
-  const std::string problem = spec.Check();
-  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "job: " + problem);
+  const auto t_start = Clock::now();
   JobOutputs out;
-  auto t0 = Clock::now();
-  const Dsm dsm = ReadDsm(spec.initial_dsm);
-  const double cell = std::abs(dsm.geo_transform[1]);
-  const double coarse_cell =
-      0.5 * spec.refine.coarse_edge_px * cell * std::ldexp(1.0, spec.refine.levels);
-  TileInput tile = PrepareTileInput(spec, dsm, coarse_cell);
-  out.view_names = tile.view_names;
-  out.prepare_s = Seconds(t0);
-  spdlog::info("job: {} views, initial mesh {} vertices ({:.1f} s to prepare)",
-               tile.refine.views.size(), tile.refine.initial_mesh.num_vertices(), out.prepare_s);
+  out.plan = PlanJob(spec);
+  out.plan_s = Seconds(t_start);
+  std::filesystem::create_directories(std::filesystem::path(out_dir) / "tiles");
 
-  out.refine = Refine(tile.refine, spec.refine, progress);
+  // Worker pool: each thread takes the next tile until none is left.
+  const size_t n = out.plan.tiles.size();
+  const bool single = n == 1;
+  out.workers = int(std::min<size_t>(spec.tiling.workers, n));
+  out.tiles.resize(n);
+  PoolProgress pool_progress(progress, n);
+  std::atomic<size_t> next{0};
+  std::atomic<bool> cancelled{false};
+  auto worker = [&] {
+    for (size_t i = next++; i < n && !cancelled; i = next++) {
+      const std::string name = out.plan.tiles[i].Name();
+      try {
+        out.tiles[i] = RunTile(spec, out.plan, int(i), out_dir, pool_progress.ForTile(i, name), single);
+      } catch (const Error&) {  // only kCancelled escapes RunTile
+        cancelled = true;
+      }
+      if (!cancelled)
+        spdlog::info("tile {} {} ({}/{})", name, out.tiles[i].ok ? "done" : "FAILED", i + 1, n);
+    }
+  };
+  const auto t_tiles = Clock::now();
+  std::vector<std::thread> threads;
+  for (int w = 1; w < out.workers; ++w) threads.emplace_back(worker);
+  worker();
+  for (auto& t : threads) t.join();
+  out.tiles_s = Seconds(t_tiles);
+  if (cancelled || progress.Cancelled()) ThrowError(ErrorCode::kCancelled, "cancelled by the caller");
 
-  t0 = Clock::now();
-  std::filesystem::create_directories(out_dir);
-  const std::string output_crs = spec.output_crs.empty() ? dsm.crs_wkt : spec.output_crs;
-  const TriangleMesh mesh_out = MeshInCrs(out.refine.mesh, tile.refine.frame, output_crs);
-  out.mesh_path = (std::filesystem::path(out_dir) / "mesh.ply").string();
-  WriteMesh(out.mesh_path, mesh_out);
-  const TriangleMesh mesh_dsm_crs = MeshInCrs(out.refine.mesh, tile.refine.frame, dsm.crs_wkt);
-  out.dsm_path = (std::filesystem::path(out_dir) / "dsm.tif").string();
-  WriteDsm(out.dsm_path, DsmFromMesh(mesh_dsm_crs, dsm));
-  out.write_s = Seconds(t0);
+  const auto failed = [](const TileResult& t) { return !t.ok; };
+  if (std::all_of(out.tiles.begin(), out.tiles.end(), failed))
+    ThrowError(out.tiles[0].error_code, single ? out.tiles[0].error
+                                               : "every tile failed; first: " + out.tiles[0].name +
+                                                     ": " + out.tiles[0].error);
+  out.assembly = AssembleOutputs(out.plan, out.tiles, out_dir);
+  out.mesh_path = out.assembly.mesh_path;
+  out.dsm_path = out.assembly.dsm_path;
+  for (const auto& t : out.tiles) out.prepare_s += t.prepare_s, out.write_s += t.write_s;
+  out.write_s += out.assembly.assemble_s;
+  if (single && out.tiles[0].ok) {
+    out.refine = out.tiles[0].refine;
+    out.view_names = out.tiles[0].view_names;
+  }
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  out.peak_rss_mb = usage.ru_maxrss / 1024.0;
+  out.total_s = Seconds(t_start);
+  progress.Report(1.0, "done");
   return out;
 }
 

@@ -1,39 +1,37 @@
 #pragma once
-// A refinement job in core terms (no JSON here: proto/ parses the wire format into this)
-// and the in-process runner that reads inputs, refines and writes the outputs.
-#include <Eigen/Core>
+// The in-process job runner: PlanJob -> RunTile on a worker pool -> AssembleOutputs.
+// The server calls the same three stages itself (tile_plan.h, tile_run.h, assemble.h).
 #include <string>
 #include <vector>
 
 #include "core/common/progress.h"
 #include "core/refine/refine.h"
+#include "core/tiling/assemble.h"
+#include "core/tiling/job_spec.h"
+#include "core/tiling/tile_plan.h"
+#include "core/tiling/tile_run.h"
 
 namespace satmesh {
 
-struct JobImage {
-  std::string path;                        // GDAL-readable image with an RPC
-  Eigen::Vector2d bias_col_row_px{0, 0};   // RPC bias correction, full-resolution pixels
-};
-
-struct JobSpec {
-  std::vector<JobImage> images;
-  std::string initial_dsm;     // GeoTIFF DSM (ellipsoidal heights), required for now
-  std::string output_crs;      // "" = the initial DSM's CRS
-  RefineOptions refine;
-  std::string Check() const;   // "" or what is wrong (field named)
-};
-
 struct JobOutputs {
-  std::string mesh_path, dsm_path;  // out_dir/mesh.ply, out_dir/dsm.tif
-  RefineResult refine;
-  std::vector<std::string> view_names;
-  double prepare_s = 0, write_s = 0;
+  JobPlan plan;
+  std::vector<TileResult> tiles;   // one per planned tile, in plan order
+  Assembly assembly;               // seams, tileset, paths
+  std::string mesh_path, dsm_path; // out_dir/mesh.ply, out_dir/dsm.tif
+  RefineResult refine;             // single-tile jobs: that tile's result (mesh in its
+                                   // frame); tiled jobs: empty (see tiles[])
+  std::vector<std::string> view_names;  // single-tile jobs: the views used
+  int workers = 1;
+  double plan_s = 0, tiles_s = 0, total_s = 0;
+  double prepare_s = 0, write_s = 0;    // summed over tiles (+ assembly for write_s)
+  double peak_rss_mb = 0;          // process peak resident memory at the end
 };
 
-// Reads the images (only the windows that see the surface), builds the local frame and
-// the initial mesh, refines, writes out_dir/mesh.ply (binary, double, output CRS) and
-// out_dir/dsm.tif (highest hit on the initial DSM's grid). Throws Error naming the input
-// that is wrong.
+// Plans, refines every tile on spec.tiling.workers threads (a failing tile is recorded
+// with its reason and the others still finish), then assembles out_dir/mesh.ply,
+// out_dir/dsm.tif and out_dir/tiles/. tileset.json and metrics.json are JSON: proto/
+// writes them (proto::WriteJobJson). Throws Error for an invalid spec or unreadable DSM,
+// Error{kCancelled} when cancelled; never for one failing tile.
 JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progress& progress = {});
 
 }  // namespace satmesh

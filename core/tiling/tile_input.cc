@@ -97,12 +97,14 @@ TileInput PrepareTileInput(const JobSpec& spec, const Dsm& dsm, double coarse_ce
     const RasterInfo info = ReadRasterInfo(image.path);
     const PixelWindow window = WindowSeeing(rpc, box_geo, info, margin_px);
     if (window.width < 16 || window.height < 16) {
-      spdlog::warn("image '{}' does not see the area; dropped", image.path);
+      spdlog::info("image '{}' does not see the area; dropped", image.path);
+      tile.dropped_views.push_back(image.path);
       continue;
     }
     RefineView view;
     view.name = image.path;
     view.image = ReadImageWindow(image.path, 1, window);
+    tile.image_bytes += double(window.width) * window.height * sizeof(float);
     view.rpc = rpc.Cropped(Eigen::Vector2d(window.col0, window.row0));
     tile.refine.views.push_back(std::move(view));
     tile.view_names.push_back(image.path);
@@ -120,6 +122,21 @@ TileInput PrepareTileInput(const JobSpec& spec, const Dsm& dsm, double coarse_ce
     mesh.vertices[i] = tile.refine.frame.LocalFromGeo(points[i]).cast<float>();
   tile.refine.initial_mesh = std::move(mesh);
   return tile;
+}
+
+double CoarseCellSize(const RefineOptions& options, double dsm_cell_m) {
+  return 0.5 * options.coarse_edge_px * dsm_cell_m * std::ldexp(1.0, options.levels);
+}
+
+TileInput PrepareTileInput(const JobSpec& spec, const JobPlan& plan, int tile_index) {
+  SATMESH_CHECK(tile_index >= 0 && tile_index < int(plan.tiles.size()), ErrorCode::kInvalidArgument,
+                "tile index " + std::to_string(tile_index) + " out of range");
+  const PlannedTile& t = plan.tiles[tile_index];
+  const Dsm crop = ReadDsmWindow(spec.initial_dsm, t.padded_cells);
+  const bool any_valid = std::any_of(crop.z.begin(), crop.z.end(), [](float z) { return std::isfinite(z); });
+  SATMESH_CHECK(any_valid, ErrorCode::kInvalidInput,
+                "tile " + t.Name() + ": the initial DSM has no valid cell in it");
+  return PrepareTileInput(spec, crop, CoarseCellSize(spec.refine, plan.dsm.geo_transform[1]));
 }
 
 }  // namespace satmesh

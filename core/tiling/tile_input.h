@@ -1,13 +1,14 @@
 #pragma once
-// Per-tile inputs: the local frame at the tile centre, the initial surface as a mesh in
-// that frame, and for every image the pixel window that sees the tile's 3D box, read
-// through GDAL, with its RPC cropped to the window.
+// Per-tile inputs: the local frame at the tile centre, the initial surface cropped to the
+// tile (+ overlap) as a mesh in that frame, and for every image that sees the tile's 3D
+// box the pixel window, read through GDAL, with its RPC cropped to the window.
 #include <string>
 #include <vector>
 
 #include "core/dsm/dsm.h"
 #include "core/refine/refine.h"
-#include "core/tiling/job.h"
+#include "core/tiling/job_spec.h"
+#include "core/tiling/tile_plan.h"
 
 namespace satmesh {
 
@@ -15,14 +16,24 @@ struct TileInput {
   RefineInput refine;
   std::string dsm_crs_wkt;   // CRS of the initial DSM
   std::vector<std::string> view_names;
+  std::vector<std::string> dropped_views;  // images that do not see the tile
+  double image_bytes = 0;    // full-resolution image windows held, bytes
 };
 
 // Downsamples a DSM by an integer factor (NaN-aware block mean; a block with no valid
 // cell stays NaN).
 Dsm DownsampleDsm(const Dsm& dsm, int factor);
 
-// Builds the refinement input for the whole initial DSM. coarse_cell_m: cell size of the
-// initial mesh (the refinement remeshes it to its coarse level anyway).
+// Cell size of the initial mesh: half the coarse level's triangle edge (the refinement
+// remeshes it to its coarse level anyway).
+double CoarseCellSize(const RefineOptions& options, double dsm_cell_m);
+
+// Builds the refinement input over all of `initial_dsm` (its centre is the frame's).
 TileInput PrepareTileInput(const JobSpec& spec, const Dsm& initial_dsm, double coarse_cell_m);
+
+// The same for one planned tile: reads only the DSM cells of the padded tile and only
+// the image windows that see its 3D box (extent x height range +- margin). Throws
+// Error{kInvalidInput} when the tile has no valid DSM cell.
+TileInput PrepareTileInput(const JobSpec& spec, const JobPlan& plan, int tile_index);
 
 }  // namespace satmesh

@@ -1,0 +1,40 @@
+#pragma once
+// A refinement job in core terms. No JSON here: proto/ parses the wire format into this.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/refine/refine_options.h"
+
+namespace satmesh {
+
+struct JobImage {
+  std::string path;                        // GDAL-readable image with an RPC
+  Eigen::Vector2d bias_col_row_px{0, 0};   // RPC bias correction, full-resolution pixels
+};
+
+// Area of interest: a polygon (a bbox is its 4 corners) in any CRS. Empty = the initial
+// surface's extent.
+struct JobAoi {
+  std::vector<Eigen::Vector2d> polygon;  // (x, y) in `crs`; >= 3 points, or empty
+  std::string crs;                       // "" = the initial DSM's CRS
+};
+
+struct TilingOptions {
+  double tile_size_m = 0;   // edge of the square tile cores, DSM CRS units (m); 0 = one tile
+  double overlap_m = 24;    // refined beyond each core edge, then trimmed, m, >= 0
+  int workers = 1;          // tiles refined at once in-process, [1, 256]
+  std::string Check() const;
+};
+
+struct JobSpec {
+  std::vector<JobImage> images;
+  std::string initial_dsm;     // GeoTIFF DSM (ellipsoidal heights), projected CRS
+  std::string output_crs;      // "" = the initial DSM's CRS
+  JobAoi aoi;
+  TilingOptions tiling;
+  RefineOptions refine;
+  std::string Check() const;   // "" or what is wrong (field named)
+};
+
+}  // namespace satmesh

@@ -1,0 +1,199 @@
+#include "core/tiling/tile_plan.h"
+
+#include <gdal_priv.h>
+#include <ogr_geometry.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "core/common/error.h"
+#include "core/common/gdal_init.h"
+#include "core/geo/crs.h"
+
+namespace satmesh {
+namespace {
+
+struct GdalCloser {
+  void operator()(GDALDataset* ds) const { GDALClose(GDALDataset::ToHandle(ds)); }
+};
+using GdalDatasetPtr = std::unique_ptr<GDALDataset, GdalCloser>;
+
+GdalDatasetPtr OpenDsm(const std::string& path) {
+  EnsureGdalInitialized();
+  GdalDatasetPtr ds(GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
+  SATMESH_CHECK(ds != nullptr, ErrorCode::kNotFound, "cannot open DSM '" + path + "'");
+  SATMESH_CHECK(ds->GetRasterCount() >= 1, ErrorCode::kInvalidInput, "DSM '" + path + "' has no band");
+  return ds;
+}
+
+// The AOI polygon in the DSM's CRS, each edge densified so curved images stay close.
+std::vector<Eigen::Vector2d> AoiInDsmCrs(const JobAoi& aoi, const DsmGrid& grid) {
+  if (aoi.crs.empty()) return aoi.polygon;
+  const CrsTransform to_dsm(aoi.crs, grid.crs_wkt);
+  std::vector<Eigen::Vector3d> points;
+  constexpr int kSteps = 16;
+  for (size_t i = 0; i < aoi.polygon.size(); ++i) {
+    const Eigen::Vector2d a = aoi.polygon[i], b = aoi.polygon[(i + 1) % aoi.polygon.size()];
+    for (int s = 0; s < kSteps; ++s) {
+      const Eigen::Vector2d p = a + (b - a) * (double(s) / kSteps);
+      points.emplace_back(p.x(), p.y(), 0.0);
+    }
+  }
+  to_dsm.Apply(&points);
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& p : points) out.emplace_back(p.x(), p.y());
+  return out;
+}
+
+std::unique_ptr<OGRPolygon> MakePolygon(const std::vector<Eigen::Vector2d>& ring_points) {
+  auto ring = std::make_unique<OGRLinearRing>();
+  for (const auto& p : ring_points) ring->addPoint(p.x(), p.y());
+  ring->closeRings();
+  auto polygon = std::make_unique<OGRPolygon>();
+  polygon->addRingDirectly(ring.release());
+  return polygon;
+}
+
+std::vector<Eigen::Vector2d> BoxRing(const Box2d& b) {
+  return {{b.xmin, b.ymin}, {b.xmax, b.ymin}, {b.xmax, b.ymax}, {b.xmin, b.ymax}};
+}
+
+PixelWindow Intersect(const PixelWindow& w, int width, int height) {
+  PixelWindow out;
+  out.col0 = std::max(0, w.col0);
+  out.row0 = std::max(0, w.row0);
+  out.width = std::max(0, std::min(width, w.col0 + w.width) - out.col0);
+  out.height = std::max(0, std::min(height, w.row0 + w.height) - out.row0);
+  return out;
+}
+
+}  // namespace
+
+std::string TilingOptions::Check() const {
+  if (!(tile_size_m >= 0) || !std::isfinite(tile_size_m))
+    return "tiling.size_m must be >= 0 (0 = one tile), got " + std::to_string(tile_size_m);
+  if (!(overlap_m >= 0) || !std::isfinite(overlap_m))
+    return "tiling.overlap_m must be >= 0, got " + std::to_string(overlap_m);
+  if (workers < 1 || workers > 256) return "tiling.workers must be in [1, 256], got " + std::to_string(workers);
+  return "";
+}
+
+Box2d DsmGrid::BoxOf(const PixelWindow& c) const {
+  const auto& gt = geo_transform;
+  return Box2d{gt[0] + c.col0 * gt[1], gt[3] + (c.row0 + c.height) * gt[5],
+               gt[0] + (c.col0 + c.width) * gt[1], gt[3] + c.row0 * gt[5]};
+}
+
+int JobPlan::IndexOf(int x, int y) const {
+  for (size_t i = 0; i < tiles.size(); ++i)
+    if (tiles[i].x == x && tiles[i].y == y) return int(i);
+  return -1;
+}
+
+DsmGrid ReadDsmGrid(const std::string& path) {
+  const GdalDatasetPtr ds = OpenDsm(path);
+  DsmGrid grid;
+  grid.width = ds->GetRasterXSize();
+  grid.height = ds->GetRasterYSize();
+  SATMESH_CHECK(ds->GetGeoTransform(grid.geo_transform.data()) == CE_None, ErrorCode::kInvalidInput,
+                "DSM '" + path + "' has no geotransform");
+  const auto& gt = grid.geo_transform;
+  SATMESH_CHECK(gt[2] == 0 && gt[4] == 0 && gt[1] > 0 && gt[5] < 0, ErrorCode::kInvalidInput,
+                "DSM '" + path + "': only north-up grids are supported");
+  const char* wkt = ds->GetProjectionRef();
+  grid.crs_wkt = wkt ? wkt : "";
+  return grid;
+}
+
+Dsm ReadDsmWindow(const std::string& path, const PixelWindow& cells) {
+  const GdalDatasetPtr ds = OpenDsm(path);
+  Dsm dsm;
+  dsm.width = cells.width;
+  dsm.height = cells.height;
+  ds->GetGeoTransform(dsm.geo_transform.data());
+  dsm.geo_transform[0] += cells.col0 * dsm.geo_transform[1];
+  dsm.geo_transform[3] += cells.row0 * dsm.geo_transform[5];
+  const char* wkt = ds->GetProjectionRef();
+  dsm.crs_wkt = wkt ? wkt : "";
+  dsm.z.assign(size_t(cells.width) * cells.height, std::numeric_limits<float>::quiet_NaN());
+  const PixelWindow in = Intersect(cells, ds->GetRasterXSize(), ds->GetRasterYSize());
+  if (in.width == 0 || in.height == 0) return dsm;
+  std::vector<float> buffer(size_t(in.width) * in.height);
+  GDALRasterBand* band = ds->GetRasterBand(1);
+  SATMESH_CHECK(band->RasterIO(GF_Read, in.col0, in.row0, in.width, in.height, buffer.data(),
+                               in.width, in.height, GDT_Float32, 0, 0, nullptr) == CE_None,
+                ErrorCode::kIo, "reading a window of DSM '" + path + "' failed");
+  int has_nodata = 0;
+  const float nodata = float(band->GetNoDataValue(&has_nodata));
+  for (int j = 0; j < in.height; ++j) {
+    for (int i = 0; i < in.width; ++i) {
+      const float z = buffer[size_t(j) * in.width + i];
+      if (std::isfinite(z) && !(has_nodata && z == nodata))
+        dsm.at(in.col0 - cells.col0 + i, in.row0 - cells.row0 + j) = z;
+    }
+  }
+  return dsm;
+}
+
+JobPlan PlanJob(const JobSpec& spec) {
+  const std::string problem = spec.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "job: " + problem);
+  JobPlan plan;
+  plan.dsm = ReadDsmGrid(spec.initial_dsm);
+  SATMESH_CHECK(!plan.dsm.crs_wkt.empty() && !CrsIsGeographic(plan.dsm.crs_wkt),
+                ErrorCode::kInvalidInput,
+                "initial DSM '" + spec.initial_dsm + "': tiling needs a projected CRS (metres)");
+  plan.output_crs = spec.output_crs.empty() ? plan.dsm.crs_wkt : spec.output_crs;
+  const auto& gt = plan.dsm.geo_transform;
+  const double cell = gt[1];
+  const PixelWindow all{0, 0, plan.dsm.width, plan.dsm.height};
+
+  // AOI -> bounding cells (cells whose centre is inside the polygon's bbox).
+  plan.aoi_polygon = spec.aoi.polygon.empty() ? BoxRing(plan.dsm.BoxOf(all))
+                                              : AoiInDsmCrs(spec.aoi, plan.dsm);
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+  for (const auto& p : plan.aoi_polygon) {
+    xmin = std::min(xmin, p.x()), xmax = std::max(xmax, p.x());
+    ymin = std::min(ymin, p.y()), ymax = std::max(ymax, p.y());
+  }
+  const int c0 = int(std::ceil((xmin - gt[0]) / cell - 0.5)), c1 = int(std::floor((xmax - gt[0]) / cell - 0.5)) + 1;
+  const int r0 = int(std::ceil((ymax - gt[3]) / gt[5] - 0.5)), r1 = int(std::floor((ymin - gt[3]) / gt[5] - 0.5)) + 1;
+  plan.aoi_cells = Intersect(PixelWindow{c0, r0, c1 - c0, r1 - r0}, plan.dsm.width, plan.dsm.height);
+  SATMESH_CHECK(plan.aoi_cells.width > 0 && plan.aoi_cells.height > 0, ErrorCode::kInvalidInput,
+                "aoi: does not overlap the initial DSM '" + spec.initial_dsm + "'");
+
+  // Tile grid over the AOI cells: x from the west, y from the south.
+  const PixelWindow& a = plan.aoi_cells;
+  plan.tile_cells = spec.tiling.tile_size_m > 0
+                        ? std::max(1, int(std::lround(spec.tiling.tile_size_m / cell)))
+                        : std::max(a.width, a.height);
+  plan.overlap_cells = int(std::ceil(spec.tiling.overlap_m / cell - 1e-9));
+  plan.nx = (a.width + plan.tile_cells - 1) / plan.tile_cells;
+  plan.ny = (a.height + plan.tile_cells - 1) / plan.tile_cells;
+  const auto aoi = MakePolygon(plan.aoi_polygon);
+  for (int ty = 0; ty < plan.ny; ++ty) {
+    for (int tx = 0; tx < plan.nx; ++tx) {
+      PlannedTile tile;
+      tile.x = tx, tile.y = ty;
+      const int col0 = a.col0 + tx * plan.tile_cells;
+      const int row1 = a.row0 + a.height - ty * plan.tile_cells;  // exclusive, south edge
+      const int row0 = std::max(a.row0, row1 - plan.tile_cells);
+      tile.core_cells = {col0, row0, std::min(plan.tile_cells, a.col0 + a.width - col0), row1 - row0};
+      const int o = plan.overlap_cells;
+      tile.padded_cells = Intersect({col0 - o, row0 - o, tile.core_cells.width + 2 * o,
+                                     tile.core_cells.height + 2 * o}, plan.dsm.width, plan.dsm.height);
+      tile.core = plan.dsm.BoxOf(tile.core_cells);
+      tile.padded = plan.dsm.BoxOf(tile.padded_cells);
+      if (!spec.aoi.polygon.empty() && !MakePolygon(BoxRing(tile.core))->Intersects(aoi.get())) continue;
+      plan.tiles.push_back(tile);
+    }
+  }
+  spdlog::info("plan: AOI {}x{} cells -> {}x{} tiles of {} cells (+{} overlap), {} kept",
+               a.width, a.height, plan.nx, plan.ny, plan.tile_cells, plan.overlap_cells, plan.tiles.size());
+  return plan;
+}
+
+}  // namespace satmesh

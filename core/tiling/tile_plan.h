@@ -1,0 +1,61 @@
+#pragma once
+// AOI -> square tiles with overlap on the initial DSM's grid. Reads only the DSM header.
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/dsm/dsm.h"
+#include "core/image/image_io.h"
+#include "core/tiling/job_spec.h"
+
+namespace satmesh {
+
+// An axis-aligned box in the plan's CRS (the initial DSM's).
+struct Box2d {
+  double xmin = 0, ymin = 0, xmax = 0, ymax = 0;
+  bool Contains(double x, double y) const { return x >= xmin && x <= xmax && y >= ymin && y <= ymax; }
+  double width() const { return xmax - xmin; }
+  double height() const { return ymax - ymin; }
+};
+
+// The initial DSM's grid without its heights.
+struct DsmGrid {
+  int width = 0, height = 0;
+  std::array<double, 6> geo_transform{0, 1, 0, 0, 0, -1};  // north-up
+  std::string crs_wkt;
+  // The box covered by a window of cells.
+  Box2d BoxOf(const PixelWindow& cells) const;
+};
+
+struct PlannedTile {
+  int x = 0, y = 0;            // column (west -> east) and row (south -> north) of the grid
+  PixelWindow core_cells;      // DSM cells kept after trimming (cell centres inside core)
+  PixelWindow padded_cells;    // core + overlap, clipped to the DSM: what is refined
+  Box2d core, padded;          // the same windows as boxes in the DSM's CRS
+  std::string Name() const { return std::to_string(x) + "_" + std::to_string(y); }
+};
+
+struct JobPlan {
+  DsmGrid dsm;                   // every extent is in dsm.crs_wkt
+  std::string output_crs;        // resolved: spec.output_crs or the DSM's CRS
+  std::vector<Eigen::Vector2d> aoi_polygon;  // in the DSM's CRS
+  PixelWindow aoi_cells;         // the AOI's bounding cells (grid of the assembled DSM)
+  int tile_cells = 0, overlap_cells = 0;  // tile core edge and overlap, in cells
+  int nx = 0, ny = 0;            // tile grid size
+  std::vector<PlannedTile> tiles;  // tiles meeting the AOI, row by row from the south-west
+  int IndexOf(int x, int y) const;  // -1 when (x, y) was not planned
+};
+
+// Reads the DSM header, maps the AOI into its CRS (edges densified) and cuts the AOI's
+// bounding cells into tiles of round(tile_size_m / cell) cells (the last row/column
+// shorter), keeping those whose core meets the AOI polygon. tile_size_m = 0 gives one
+// tile over the AOI. Throws Error{kInvalidArgument} naming the field for a bad spec,
+// Error{kInvalidInput} for a geographic or rotated DSM or an AOI outside it.
+JobPlan PlanJob(const JobSpec& spec);
+
+// Reads a window of cells of a DSM (nodata -> NaN); cells outside the raster are NaN.
+Dsm ReadDsmWindow(const std::string& path, const PixelWindow& cells);
+DsmGrid ReadDsmGrid(const std::string& path);
+
+}  // namespace satmesh
