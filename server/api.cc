@@ -103,7 +103,7 @@ struct ApiServer::Impl {
     const std::string problem = spec.Check();
     if (!problem.empty()) ThrowError(ErrorCode::kInvalidArgument, problem);
     CheckLimits(spec, {}, options.inputs);
-    const JobPlan plan = executor->Plan(spec);
+    const ExecutionPlan plan = executor->Plan(spec);
     CheckLimits(spec, plan, options.inputs);
     const std::string key = req.get_header_value("Idempotency-Key");
     if (key.size() > 256) throw HttpError(400, "bad-request", "Idempotency-Key: longer than 256 characters");

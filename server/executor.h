@@ -18,7 +18,7 @@ struct TileKey {
   bool operator==(const TileKey&) const = default;
 };
 
-struct JobPlan {
+struct ExecutionPlan {
   std::vector<TileKey> tiles;  // in processing order
   int64_t pixels = 0;          // total image pixels the job reads (limits)
 };
@@ -27,14 +27,19 @@ class JobExecutor {
  public:
   virtual ~JobExecutor() = default;
   // Checks the inputs (throws Error naming the field/file) and splits the job into tiles.
-  virtual JobPlan Plan(const JobSpec& spec) = 0;
+  virtual ExecutionPlan Plan(const JobSpec& spec) = 0;
   // Refines one tile; writes job_dir/tiles/<x>_<y>.glb (and any per-tile work files).
-  // Throws Error{kCancelled} when progress.Cancelled() turns true.
-  virtual void RunTile(const JobSpec& spec, const TileKey& tile, const std::string& job_dir,
-                       const Progress& progress) = 0;
+  // Returns the tile's result record: the scheduler persists it with the tile and hands
+  // it back to Assemble (also after a restart). Throws Error naming the reason when the
+  // tile fails, Error{kCancelled} when progress.Cancelled() turns true. Re-running a
+  // tile must be harmless (files written to a temporary name and renamed).
+  virtual nlohmann::json RunTile(const JobSpec& spec, const TileKey& tile,
+                                 const std::string& job_dir, const Progress& progress) = 0;
   // After every tile is done: writes job_dir/tileset.json, metrics.json (and mesh.ply,
-  // dsm.tif where the engine makes them); returns the metrics.
+  // dsm.tif where the engine makes them); returns the metrics. tile_results[i] is what
+  // RunTile returned for tiles[i].
   virtual nlohmann::json Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
+                                  const std::vector<nlohmann::json>& tile_results,
                                   const std::string& job_dir) = 0;
 };
 

@@ -85,7 +85,7 @@ void ResolveHrefs(nlohmann::json* job, const InputPolicy& policy) {
   }
 }
 
-void CheckLimits(const JobSpec& spec, const JobPlan& plan, const InputPolicy& policy) {
+void CheckLimits(const JobSpec& spec, const ExecutionPlan& plan, const InputPolicy& policy) {
   if (int(spec.images.size()) > policy.max_images)
     ThrowError(ErrorCode::kInvalidArgument, "images: " + std::to_string(spec.images.size()) +
                                                 " images exceed this server's limit of " +

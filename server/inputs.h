@@ -27,6 +27,6 @@ struct InputPolicy {
 void ResolveHrefs(nlohmann::json* job, const InputPolicy& policy);
 
 // Throws Error{kInvalidArgument} naming the limit a planned job exceeds.
-void CheckLimits(const JobSpec& spec, const JobPlan& plan, const InputPolicy& policy);
+void CheckLimits(const JobSpec& spec, const ExecutionPlan& plan, const InputPolicy& policy);
 
 }  // namespace satmesh::server

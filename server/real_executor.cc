@@ -67,8 +67,8 @@ void WriteTileset(const std::string& job_dir, const std::vector<TileKey>& tiles)
   WriteFileAtomic((fs::path(job_dir) / "tileset.json").string(), tileset.dump(2));
 }
 
-JobPlan RealExecutor::Plan(const JobSpec& spec) {
-  JobPlan plan;
+ExecutionPlan RealExecutor::Plan(const JobSpec& spec) {
+  ExecutionPlan plan;
   for (size_t i = 0; i < spec.images.size(); ++i) {
     const RasterInfo info = InfoFor(spec.images[i].path, "images[" + std::to_string(i) + "].href");
     plan.pixels += int64_t(info.width) * info.height;
@@ -78,7 +78,7 @@ JobPlan RealExecutor::Plan(const JobSpec& spec) {
   return plan;
 }
 
-void RealExecutor::RunTile(const JobSpec& spec, const TileKey& tile, const std::string& job_dir,
+json RealExecutor::RunTile(const JobSpec& spec, const TileKey& tile, const std::string& job_dir,
                            const Progress& progress) {
   const fs::path work = fs::path(job_dir) / "work" / tile.Name();
   fs::create_directories(work);
@@ -89,10 +89,11 @@ void RealExecutor::RunTile(const JobSpec& spec, const TileKey& tile, const std::
   const fs::path tmp = fs::path(job_dir) / "tiles" / (".partial." + tile.Name() + ".glb");
   WriteMesh(tmp.string(), ReadMesh(outputs.mesh_path));
   fs::rename(tmp, glb);
+  return {{"work", "work/" + tile.Name()}};
 }
 
 json RealExecutor::Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
-                            const std::string& job_dir) {
+                            const std::vector<json>& tile_results, const std::string& job_dir) {
   SATMESH_CHECK(tiles.size() == 1, ErrorCode::kInternal, "the single-tile runner got several tiles");
   const fs::path dir(job_dir), work = dir / "work" / tiles[0].Name();
   json metrics = ReadJsonFile((work / "metrics.json").string());

@@ -9,10 +9,11 @@ namespace satmesh::server {
 // tileset.json (3D Tiles 1.1), metrics.json, mesh.ply and dsm.tif into job_dir.
 class RealExecutor : public JobExecutor {
  public:
-  JobPlan Plan(const JobSpec& spec) override;
-  void RunTile(const JobSpec& spec, const TileKey& tile, const std::string& job_dir,
-               const Progress& progress) override;
+  ExecutionPlan Plan(const JobSpec& spec) override;
+  nlohmann::json RunTile(const JobSpec& spec, const TileKey& tile, const std::string& job_dir,
+                         const Progress& progress) override;
   nlohmann::json Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
+                          const std::vector<nlohmann::json>& tile_results,
                           const std::string& job_dir) override;
 };
 

@@ -85,7 +85,7 @@ void Scheduler::Stop() {
 }
 
 JobRecord Scheduler::Submit(const nlohmann::json& request, const JobSpec& spec,
-                            const JobPlan& plan, const std::string& idempotency_key,
+                            const ExecutionPlan& plan, const std::string& idempotency_key,
                             bool* created) {
   Entry entry;
   {
@@ -292,9 +292,10 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
   };
   enum { kDone, kFailed, kCancelled } outcome = kDone;
   std::string message;
+  nlohmann::json result;
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    executor_->RunTile(spec, key, store_->JobDir(id), progress);
+    result = executor_->RunTile(spec, key, store_->JobDir(id), progress);
   } catch (const Error& err) {
     outcome = err.code() == ErrorCode::kCancelled ? kCancelled : kFailed;
     message = err.what();
@@ -304,6 +305,29 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   bool remove_outputs = false, more_work = false;
+  // A finished tile is written to disk before anyone can see it done, so a tile reported
+  // done is never run again after a crash (save_mu_ held until memory matches the disk).
+  std::unique_lock save(save_mu_, std::defer_lock);
+  if (outcome == kDone) {
+    save.lock();
+    JobRecord snapshot;
+    {
+      std::lock_guard lock(mu_);
+      snapshot = jobs_.at(id).record;
+    }
+    if (snapshot.status != JobStatus::kDismissed) {
+      TileRecord& t = snapshot.tiles[tile_index];
+      t.status = TileStatus::kDone;
+      t.duration_s = seconds;
+      t.result = result;
+      snapshot.updated = NowRfc3339();
+      try {
+        store_->SaveState(snapshot);
+      } catch (const std::exception& err) {
+        spdlog::error("job {}: cannot save state: {}", id, err.what());
+      }
+    }
+  }
   {
     std::lock_guard lock(mu_);
     Entry& e = jobs_.at(id);
@@ -313,6 +337,7 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
       t.status = TileStatus::kDone;
       t.progress = 1;
       t.duration_s = seconds;
+      t.result = std::move(result);
       ++tiles_done_;
       duration_sum_s_ += seconds;
       for (size_t b = 0; b < duration_counts_.size(); ++b)
@@ -340,6 +365,7 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
     if (more_work) ready_.push_back(id);
     Touch(&e);
   }
+  if (save.owns_lock()) save.unlock();
   Persist(id);
   if (remove_outputs) store_->RemoveOutputs(id);
   if (more_work) work_cv_.notify_one();
@@ -349,15 +375,19 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
 void Scheduler::AssembleJob(const std::string& id) {
   JobSpec spec;
   std::vector<TileKey> keys;
+  std::vector<nlohmann::json> results;
   {
     std::lock_guard lock(mu_);
     Entry& e = jobs_.at(id);
     spec = e.spec;
-    for (const auto& t : e.record.tiles) keys.push_back(t.key);
+    for (const auto& t : e.record.tiles) {
+      keys.push_back(t.key);
+      results.push_back(t.result);
+    }
   }
   std::string message;
   try {
-    executor_->Assemble(spec, keys, store_->JobDir(id));
+    executor_->Assemble(spec, keys, results, store_->JobDir(id));
   } catch (const std::exception& err) {
     message = std::string("assembling the outputs: ") + err.what();
   }

@@ -42,7 +42,7 @@ class Scheduler {
 
   // Adds a validated, planned job. With a non-empty idempotency key already used, returns
   // that job instead and sets *created = false.
-  JobRecord Submit(const nlohmann::json& request, const JobSpec& spec, const JobPlan& plan,
+  JobRecord Submit(const nlohmann::json& request, const JobSpec& spec, const ExecutionPlan& plan,
                    const std::string& idempotency_key, bool* created);
   std::optional<JobRecord> Get(const std::string& id) const;
   // Newest first; status filter optional; at most `limit`.

@@ -76,7 +76,7 @@ nlohmann::json StateToJson(const JobRecord& job) {
   for (const auto& t : job.tiles) {
     tiles.push_back({{"x", t.key.x}, {"y", t.key.y}, {"status", TileStatusName(t.status)},
                      {"duration_s", t.duration_s}, {"attempts", t.attempts},
-                     {"message", t.message}});
+                     {"message", t.message}, {"result", t.result}});
   }
   return {{"id", job.id}, {"idempotency_key", job.idempotency_key},
           {"status", JobStatusName(job.status)}, {"created", job.created},
@@ -106,6 +106,7 @@ JobRecord StateFromJson(const nlohmann::json& s) {
     tile.duration_s = t.value("duration_s", 0.0);
     tile.attempts = t.value("attempts", 0);
     tile.message = t.value("message", "");
+    if (t.contains("result")) tile.result = t["result"];
     tile.progress = tile.status == TileStatus::kDone ? 1.0 : 0.0;
     job.tiles.push_back(tile);
   }

@@ -28,6 +28,7 @@ struct TileRecord {
   double duration_s = 0;     // wall time of the run that finished it
   int attempts = 0;          // runs started (a restart re-runs an unfinished tile)
   std::string message;       // failure reason
+  nlohmann::json result;     // what the executor returned for the tile (persisted)
 };
 
 struct JobRecord {

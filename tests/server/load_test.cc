@@ -1,0 +1,50 @@
+// 20 clients polling status while tiles run: every poll answers; latency is printed
+// (p50/p99), not asserted.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+
+#include "tests/server/test_server.h"
+
+namespace satmesh::server::testing {
+namespace {
+
+TEST(Load, TwentyClientsPollWhileTilesRun) {
+  TestServer s("load", Stub(4, 2, 250), /*workers=*/2);
+  s.Start();
+  const std::string id = Submit(s, MakeStubJob(s.root));
+  ASSERT_FALSE(id.empty());
+  constexpr int kClients = 20;
+  std::vector<std::vector<double>> latency_ms(kClients);
+  std::atomic<int> failures{0};
+  std::atomic<bool> finished{false};
+  std::vector<std::thread> threads;
+  for (int i = 0; i < kClients; ++i) {
+    threads.emplace_back([&, i] {
+      auto c = s.Client();
+      for (int n = 0; n < 2000 && !finished; ++n) {  // bounded
+        const auto t0 = std::chrono::steady_clock::now();
+        auto r = c.Get(("/jobs/" + id).c_str());
+        latency_ms[i].push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        if (!r || r->status != 200) { ++failures; continue; }
+        if (Json(r)["status"] == "successful") finished = true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+    });
+  }
+  for (auto& t : threads) t.join();
+  std::vector<double> all;
+  for (const auto& v : latency_ms) all.insert(all.end(), v.begin(), v.end());
+  std::sort(all.begin(), all.end());
+  ASSERT_FALSE(all.empty());
+  const auto pct = [&](double p) { return all[std::min(all.size() - 1, size_t(p * double(all.size())))]; };
+  std::printf("[ latency ] %d clients, %zu status requests while 8 tiles ran: p50 %.2f ms, p99 %.2f ms, max %.2f ms\n",
+              kClients, all.size(), pct(0.5), pct(0.99), all.back());
+  EXPECT_EQ(failures.load(), 0);
+  EXPECT_TRUE(finished.load());
+}
+
+}  // namespace
+}  // namespace satmesh::server::testing

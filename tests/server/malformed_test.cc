@@ -1,0 +1,122 @@
+// Malformed requests: each gets the right 4xx as problem+json naming the field, and the
+// server stays healthy.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "tests/server/test_server.h"
+
+namespace satmesh::server::testing {
+namespace {
+
+using nlohmann::json;
+
+struct Case {
+  std::string method, path, body;
+  int status;
+  std::string detail;  // a substring the problem's detail must contain
+  std::string content_type = "application/json";
+};
+
+json Job() { return {{"images", {{{"href", "a.tif"}}, {{"href", "b.tif"}}}}, {"initial", {{"dsm", "dsm.tif"}}}}; }
+
+std::string With(const std::function<void(json&)>& edit) {
+  json j = Job();
+  edit(j);
+  return j.dump();
+}
+
+std::vector<Case> Cases(const std::string& job_id) {
+  const std::string exec = "/processes/refine-mesh/execution";
+  std::vector<Case> c = {
+      {"POST", exec, "{bad", 400, "request body"},
+      {"POST", exec, "", 400, "request body"},
+      {"POST", exec, "[]", 400, "job"},
+      {"POST", exec, "\"x\"", 400, "job"},
+      {"POST", exec, "null", 400, "job"},
+      {"POST", exec, With([](json& j) { j.erase("images"); }), 400, "images"},
+      {"POST", exec, With([](json& j) { j["images"] = "a.tif"; }), 400, "images"},
+      {"POST", exec, With([](json& j) { j["images"].erase(1); }), 400, "images"},
+      {"POST", exec, With([](json& j) { j["images"][0] = 5; }), 400, "images[0]"},
+      {"POST", exec, With([](json& j) { j["images"][1].erase("href"); }), 400, "images[1].href"},
+      {"POST", exec, With([](json& j) { j["images"][1]["href"] = 5; }), 400, "images[1].href"},
+      {"POST", exec, With([](json& j) { j["images"][0]["href"] = ""; }), 400, "images[0].href"},
+      {"POST", exec, With([](json& j) { j["images"][0]["href"] = true; }), 400, "images[0].href"},
+      {"POST", exec, With([](json& j) { j["images"][0]["bias"] = {1}; }), 400, "images[0].bias"},
+      {"POST", exec, With([](json& j) { j["images"][0]["bias"] = {"a", "b"}; }), 400, "images[0].bias[0]"},
+      {"POST", exec, With([](json& j) { j.erase("initial"); }), 400, "initial"},
+      {"POST", exec, With([](json& j) { j["initial"] = "dsm.tif"; }), 400, "initial"},
+      {"POST", exec, With([](json& j) { j["initial"].erase("dsm"); }), 400, "initial.dsm"},
+      {"POST", exec, With([](json& j) { j["initial"]["dsm"] = 1; }), 400, "initial.dsm"},
+      {"POST", exec, With([](json& j) { j["extra"] = 1; }), 400, "extra"},
+      {"POST", exec, With([](json& j) { j["images"][0]["gain"] = 1; }), 400, "images[0].gain"},
+      {"POST", exec, With([](json& j) { j["options"] = 3; }), 400, "options"},
+      {"POST", exec, With([](json& j) { j["options"]["speed"] = 3; }), 400, "options.speed"},
+      {"POST", exec, With([](json& j) { j["options"]["levels"] = "2"; }), 400, "options.levels"},
+      {"POST", exec, With([](json& j) { j["options"]["levels"] = 99; }), 400, "levels"},
+      {"POST", exec, With([](json& j) { j["options"]["iterations_per_level"] = -1; }), 400, "iterations"},
+      {"POST", exec, With([](json& j) { j["options"]["levels"] = 1.5; }), 400, "options.levels"},
+      {"POST", exec, With([](json& j) { j["outputs"] = {{"crs", 4326}}; }), 400, "outputs.crs"},
+      {"POST", exec, With([](json& j) { j["images"][1]["href"] = "nope.tif"; }), 400, "images[1].href"},
+      {"POST", exec, With([](json& j) { j["images"][0]["href"] = "../a.tif"; }), 403, "images[0].href"},
+      {"POST", exec, With([](json& j) { j["images"][0]["href"] = "sub/../../../etc/passwd"; }), 403, "images[0].href"},
+      {"POST", exec, With([](json& j) { j["initial"]["dsm"] = "/etc/passwd"; }), 403, "initial.dsm"},
+      {"POST", exec, With([](json& j) { j["images"][1]["href"] = "escape/passwd"; }), 403, "images[1].href"},
+      {"POST", exec, With([](json& j) { j["images"][0]["href"] = "/vsicurl/http://example.com/a.tif"; }), 403, "images[0].href"},
+      {"POST", exec, With([](json& j) { j["images"][0]["href"] = "/vsis3/bucket/a.tif"; }), 403, "images[0].href"},
+      {"POST", exec, With([](json& j) { j["images"][0]["href"] = "sub"; }), 400, "images[0].href"},
+      {"POST", exec, With([](json& j) { for (int i = 0; i < 8; ++i) j["images"].push_back({{"href", "a.tif"}}); }), 400, "limit of 8"},
+      {"POST", exec, std::string(2 << 20, ' '), 413, ""},
+      {"POST", exec, Job().dump(), 415, "Content-Type", "text/plain"},
+      {"POST", "/processes/nope/execution", Job().dump(), 404, "nope"},
+      {"POST", exec, json{{"inputs", 5}}.dump(), 400, "job"},
+      {"GET", "/processes/nope", "", 404, "nope"},
+      {"GET", "/jobs/doesnotexist", "", 404, "doesnotexist"},
+      {"DELETE", "/jobs/doesnotexist", "", 404, "doesnotexist"},
+      {"GET", "/jobs/doesnotexist/results", "", 404, "doesnotexist"},
+      {"GET", "/jobs/doesnotexist/tiles", "", 404, "doesnotexist"},
+      {"GET", "/jobs/doesnotexist/tiles/0_0.glb", "", 404, "doesnotexist"},
+      {"GET", "/jobs/doesnotexist/events", "", 404, "doesnotexist"},
+      {"GET", "/jobs?status=bogus", "", 400, "status"},
+      {"GET", "/jobs?limit=abc", "", 400, "limit"},
+      {"GET", "/jobs?limit=0", "", 400, "limit"},
+      {"GET", "/jobs/" + job_id + "/tiles/9_9.glb", "", 404, "9_9"},
+      {"GET", "/jobs/" + job_id + "/results/job.json", "", 404, ""},
+      {"GET", "/jobs/" + job_id + "/results/state.json", "", 404, ""},
+      {"GET", "/no/such/route", "", 404, ""},
+  };
+  return c;
+}
+
+TEST(Malformed, EveryRequestGetsTheRightProblemAndTheServerStaysHealthy) {
+  TestServer s("malformed", Stub(1, 1, 10));
+  MakeStubJob(s.root);
+  std::filesystem::create_directories(s.root + "/sub");
+  std::filesystem::create_symlink("/etc", s.root + "/escape");
+  s.options.max_body_bytes = 1 << 20;
+  s.Start();
+  auto c = s.Client();
+  const std::string id = Submit(s, Job());
+  ASSERT_FALSE(id.empty());
+  const auto cases = Cases(id);
+  ASSERT_GE(cases.size(), 50u);
+  for (const Case& k : cases) {
+    httplib::Result r = k.method == "POST"   ? c.Post(k.path.c_str(), k.body, k.content_type.c_str())
+                        : k.method == "GET" ? c.Get(k.path.c_str())
+                                            : c.Delete(k.path.c_str());
+    ASSERT_TRUE(r) << k.method << " " << k.path << ": no response";
+    EXPECT_EQ(r->status, k.status) << k.path << " " << k.body.substr(0, 120) << " -> " << r->body;
+    if (k.status == 413 && r->body.empty()) continue;  // httplib may close before the body
+    EXPECT_EQ(r->get_header_value("Content-Type"), "application/problem+json") << k.path;
+    const json p = Json(r);
+    EXPECT_EQ(p.value("status", 0), k.status);
+    EXPECT_NE(p.value("detail", "").find(k.detail), std::string::npos)
+        << k.body.substr(0, 120) << " -> " << p.dump();
+  }
+  EXPECT_EQ(Json(c.Get("/health"))["status"], "ok");
+  EXPECT_EQ(WaitFor(s, id, "successful")["status"], "successful");
+  EXPECT_EQ(Json(c.Get("/jobs"))["jobs"].size(), 1u);  // none of the bad requests made a job
+}
+
+}  // namespace
+}  // namespace satmesh::server::testing
