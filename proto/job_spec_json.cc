@@ -183,7 +183,9 @@ void ApplyOptionOverride(json* job, const std::string& key_equals_value) {
     parsed = value;
   }
   const auto dot = key.find('.');
-  if (dot == std::string::npos) {
+  if (key == "aoi" || key == "tiling" || key == "outputs") {
+    (*job)[key] = parsed;  // a whole top-level object, e.g. aoi={"bbox": [...]}
+  } else if (dot == std::string::npos) {
     (*job)["options"][key] = parsed;  // a refinement option
   } else {
     (*job)[key.substr(0, dot)][key.substr(dot + 1)] = parsed;  // e.g. tiling.size_m

@@ -71,6 +71,8 @@ TEST(ApplyOptionOverride, DottedKeysSetTopLevelObjects) {
   EXPECT_EQ(job["tiling"]["size_m"], 150);
   EXPECT_EQ(job["options"]["levels"], 2);
   EXPECT_EQ(proto::JobSpecFromJson(job, "/b").tiling.tile_size_m, 150);
+  proto::ApplyOptionOverride(&job, R"(aoi={"bbox": [0, 0, 10, 10]})");
+  EXPECT_EQ(proto::JobSpecFromJson(job, "/b").aoi.polygon.size(), 4u);
 }
 
 }  // namespace
