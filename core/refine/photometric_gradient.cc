@@ -13,9 +13,9 @@ void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
   const int w = vi.width(), h = vi.height();
   const size_t n = size_t(w) * h;
   PairWorkspace& warp = *ws;
-  warp.a.assign(n, 0.f);
-  warp.b.assign(n, 0.f);
-  warp.db_dn.assign(n, 0.f);
+  warp.a.resize(n);  // read only where valid
+  warp.b.resize(n);
+  warp.db_dn.resize(n);
   warp.valid.assign(n, 0);
   const double tol2 = options.visibility_tolerance_m * options.visibility_tolerance_m;
   const int wj = vj.width(), hj = vj.height();

@@ -15,10 +15,10 @@ struct PairOptions {
 };
 
 struct RefineOptions {
-  int levels = 3;                  // coarsest pyramid level L (images at 1/2^L), [0, 6]
+  int levels = 2;                  // coarsest pyramid level L (images at 1/2^L), [0, 6]
   int iterations_per_level = 20;   // gradient steps per level, [0, 1000]
-  double alpha = 1.0;              // weight of the photometric term M, >= 0
-  double beta = 0.2;               // weight of the thin-plate term (homogenised by 1/GSD²), >= 0
+  double alpha = 2.0;              // weight of the photometric term M, >= 0
+  double beta = 0.1;               // weight of the thin-plate term (homogenised by 1/GSD²), >= 0
   double step = 0.5;               // gradient step, in units of (level GSD)², > 0
   double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD, > 0
   int zncc_window_radius = 2;      // ZNCC window (2r+1)², r in [1, 7]

@@ -1,36 +1,48 @@
 #include "core/refine/zncc.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace satmesh {
 namespace {
 
-// Sums of `in` over the (2r+1)² window around each pixel (truncated at the borders), in place.
-void BoxSum(std::vector<double>& in_out, int width, int height, int r, std::vector<double>& rows) {
-  const std::vector<double>& in = in_out;
-  std::vector<double>& out = in_out;
-  rows.resize(in.size());
+// In-place box sums of K interleaved channels (data[pixel * K + k]) over the (2r+1)²
+// window around each pixel, truncated at the borders. One pass per direction for all
+// channels keeps the memory traffic down (this is the ZNCC's hot loop).
+template <int K>
+void BoxSumInterleaved(std::vector<double>& data, int width, int height, int r,
+                       std::vector<double>& rows) {
+  rows.resize(data.size());
   for (int y = 0; y < height; ++y) {
-    const double* src = &in[size_t(y) * width];
-    double* dst = &rows[size_t(y) * width];
-    double acc = 0;
-    for (int x = 0; x <= r && x < width; ++x) acc += src[x];
+    const double* src = &data[size_t(y) * width * K];
+    double* dst = &rows[size_t(y) * width * K];
+    double acc[K] = {};
+    for (int x = 0; x <= r && x < width; ++x)
+      for (int k = 0; k < K; ++k) acc[k] += src[x * K + k];
     for (int x = 0; x < width; ++x) {
-      dst[x] = acc;
-      if (x + r + 1 < width) acc += src[x + r + 1];
-      if (x - r >= 0) acc -= src[x - r];
+      for (int k = 0; k < K; ++k) dst[x * K + k] = acc[k];
+      if (x + r + 1 < width)
+        for (int k = 0; k < K; ++k) acc[k] += src[(x + r + 1) * K + k];
+      if (x - r >= 0)
+        for (int k = 0; k < K; ++k) acc[k] -= src[(x - r) * K + k];
     }
   }
-  std::vector<double> acc(width, 0.0);
-  for (int y = 0; y <= r && y < height; ++y)
-    for (int x = 0; x < width; ++x) acc[x] += rows[size_t(y) * width + x];
+  const size_t row_len = size_t(width) * K;
+  std::vector<double> acc(row_len, 0.0);
+  for (int y = 0; y <= r && y < height; ++y) {
+    const double* src = &rows[y * row_len];
+    for (size_t i = 0; i < row_len; ++i) acc[i] += src[i];
+  }
   for (int y = 0; y < height; ++y) {
-    double* dst = &out[size_t(y) * width];
-    for (int x = 0; x < width; ++x) dst[x] = acc[x];
-    if (y + r + 1 < height)
-      for (int x = 0; x < width; ++x) acc[x] += rows[size_t(y + r + 1) * width + x];
-    if (y - r >= 0)
-      for (int x = 0; x < width; ++x) acc[x] -= rows[size_t(y - r) * width + x];
+    std::copy(acc.begin(), acc.end(), data.begin() + y * row_len);
+    if (y + r + 1 < height) {
+      const double* add = &rows[(y + r + 1) * row_len];
+      for (size_t i = 0; i < row_len; ++i) acc[i] += add[i];
+    }
+    if (y - r >= 0) {
+      const double* sub = &rows[(y - r) * row_len];
+      for (size_t i = 0; i < row_len; ++i) acc[i] -= sub[i];
+    }
   }
 }
 
@@ -46,48 +58,53 @@ ZnccField ComputeZnccField(const std::vector<float>& a, const std::vector<float>
   const double min_count = options.min_valid_fraction * (2 * r + 1) * (2 * r + 1);
   const double eps = options.variance_floor;
 
-  for (auto& b : ws.buffers) b.assign(n, 0.0);
-  std::vector<double>&v = ws.buffers[0], &va = ws.buffers[1], &vb = ws.buffers[2],
-                     &vaa = ws.buffers[3], &vbb = ws.buffers[4], &vab = ws.buffers[5];
+  // Window sums of 1, a, b, a², b², ab over valid pixels.
+  std::vector<double>& sums = ws.buffers[0];
+  sums.resize(6 * n);
   for (size_t i = 0; i < n; ++i) {
-    if (!valid[i]) continue;
-    v[i] = 1;
-    va[i] = a[i];
-    vb[i] = b[i];
-    vaa[i] = double(a[i]) * a[i];
-    vbb[i] = double(b[i]) * b[i];
-    vab[i] = double(a[i]) * b[i];
+    double* s = &sums[6 * i];
+    if (!valid[i]) {
+      std::fill(s, s + 6, 0.0);
+      continue;
+    }
+    const double ai = a[i], bi = b[i];
+    s[0] = 1, s[1] = ai, s[2] = bi, s[3] = ai * ai, s[4] = bi * bi, s[5] = ai * bi;
   }
-  for (int k = 0; k < 6; ++k) BoxSum(ws.buffers[k], width, height, r, ws.rows);
-  const std::vector<double>&s_v = v, &s_a = va, &s_b = vb, &s_aa = vaa, &s_bb = vbb, &s_ab = vab;
+  BoxSumInterleaved<6>(sums, width, height, r, ws.rows);
 
   ZnccField field;
   field.zncc.assign(n, 0.f);
   field.dM_db.assign(n, 0.f);
-  // Per-window coefficients of the derivative (A..D in DESIGN.md).
-  std::vector<double>&A = ws.buffers[6], &B = ws.buffers[7], &C = ws.buffers[8], &D = ws.buffers[9];
+  // Per-window coefficients of the derivative (A..D in DESIGN.md), summed over windows.
+  std::vector<double>& coeffs = ws.buffers[1];
+  coeffs.resize(4 * n);
   for (size_t i = 0; i < n; ++i) {
-    const double count = s_v[i];
-    if (!valid[i] || count < min_count) continue;
-    const double mu_a = s_a[i] / count, mu_b = s_b[i] / count;
-    const double var_a = std::max(0.0, s_aa[i] / count - mu_a * mu_a) + eps;
-    const double var_b = std::max(0.0, s_bb[i] / count - mu_b * mu_b) + eps;
-    const double cov = s_ab[i] / count - mu_a * mu_b;
+    double* c = &coeffs[4 * i];
+    const double* s = &sums[6 * i];
+    const double count = s[0];
+    if (!valid[i] || count < min_count) {
+      std::fill(c, c + 4, 0.0);
+      continue;
+    }
+    const double mu_a = s[1] / count, mu_b = s[2] / count;
+    const double var_a = std::max(0.0, s[3] / count - mu_a * mu_a) + eps;
+    const double var_b = std::max(0.0, s[4] / count - mu_b * mu_b) + eps;
+    const double cov = s[5] / count - mu_a * mu_b;
     const double sigma_ab = std::sqrt(var_a * var_b);
     const double zncc = cov / sigma_ab;
     field.zncc[i] = float(zncc);
     field.sum_zncc += zncc;
     ++field.num_windows;
-    A[i] = 1.0 / (count * sigma_ab);
-    B[i] = mu_a * A[i];
-    C[i] = zncc / (count * var_b);
-    D[i] = mu_b * C[i];
+    c[0] = 1.0 / (count * sigma_ab);  // A
+    c[1] = mu_a * c[0];               // B
+    c[2] = zncc / (count * var_b);    // C
+    c[3] = mu_b * c[2];               // D
   }
-  for (int k = 6; k < 10; ++k) BoxSum(ws.buffers[k], width, height, r, ws.rows);
-  const std::vector<double>&sum_A = A, &sum_B = B, &sum_C = C, &sum_D = D;
+  BoxSumInterleaved<4>(coeffs, width, height, r, ws.rows);
   for (size_t i = 0; i < n; ++i) {
     if (!valid[i]) continue;
-    const double dzncc_db = a[i] * sum_A[i] - sum_B[i] - b[i] * sum_C[i] + sum_D[i];
+    const double* c = &coeffs[4 * i];
+    const double dzncc_db = a[i] * c[0] - c[1] - b[i] * c[2] + c[3];
     field.dM_db[i] = float(-dzncc_db);
   }
   return field;

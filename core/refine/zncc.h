@@ -24,7 +24,7 @@ struct ZnccField {
 
 // Scratch buffers, reused across calls to avoid reallocating per pair.
 struct ZnccWorkspace {
-  std::vector<double> buffers[10], rows;
+  std::vector<double> buffers[2], rows;
 };
 
 // a, b: reference and warped images (width*height, row-major); valid: 1 where both exist.
