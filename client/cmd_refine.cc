@@ -30,11 +30,11 @@ int RunRefine(const std::vector<std::string>& argv) {
       std::printf("tile %-7s FAILED: %s\n", tile.name.c_str(), tile.error.c_str());
       continue;
     }
-    const auto& last = tile.refine.levels.back();
-    std::printf("tile %-7s %2zu views  %8zu faces  ZNCC %.4f -> %.4f  %.1f s  %.0f MB images\n",
+    const auto& zncc = tile.refine.levels.back().mean_zncc;  // the finest level
+    std::printf("tile %-7s %2zu views  %8zu faces  level-0 ZNCC %.4f -> %.4f  %.1f s  %.0f MB images\n",
                 tile.name.c_str(), tile.view_names.size(), tile.core_faces,
-                tile.refine.levels.front().mean_zncc.front(),
-                last.mean_zncc.empty() ? 0.0 : last.mean_zncc.back(), tile.refine_s, tile.image_mb);
+                zncc.empty() ? 0.0 : zncc.front(), zncc.empty() ? 0.0 : zncc.back(), tile.refine_s,
+                tile.image_mb);
   }
   const auto& seams = outputs.assembly.seams_total;
   if (seams.cells > 0)

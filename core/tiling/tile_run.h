@@ -24,9 +24,9 @@ struct TileResult {
   RefineResult refine;              // stats; mesh kept only when asked (keep_mesh)
   size_t core_vertices = 0, core_faces = 0;   // the trimmed piece
   // 3D Tiles: region [west, south, east, north] (radians, WGS84) + [min h, max h] (m) of
-  // the piece, and the column-major 4x4 transform from the .glb's frame (glTF y-up, ENU
-  // at the core centre: x east, y up, z south) to ECEF... as 3D Tiles expects it: the
-  // tile transform maps the z-up ENU frame to ECEF, glTF's y-up is rotated by the viewer.
+  // the piece (padded 0.1 m), and the column-major 4x4 tile transform from the tile frame
+  // (z-up ENU at the core centre) to ECEF. The .glb stores glTF y-up positions
+  // (east, up, -north), which 3D Tiles viewers rotate into that z-up frame.
   std::array<double, 6> region{};
   std::array<double, 16> transform{};
   double image_mb = 0;              // image windows held while refining (full resolution)
@@ -39,8 +39,12 @@ std::string TileGlbPath(const PlannedTile& tile);    // tiles/<x>_<y>.glb: core,
 std::string TilePiecePath(const PlannedTile& tile);  // tiles/<x>_<y>.ply: core, output CRS
 std::string TileDsmPath(const PlannedTile& tile);    // tiles/<x>_<y>.tif: padded, DSM grid
 
+// Memory: one tile's image windows (views x (tile + 2 overlap + margins)^2 / GSD^2 x 4 B)
+// plus the refinement's per-view workspaces (pyramids, gradients, hit maps; ~30x the
+// windows) and the mesh. Measured: 60 m tiles + 12 m overlap, 10 views, 0.3 m GSD: 6 MB
+// of windows, 262 MB peak RSS; the same AOI in one piece: 19 MB, 638 MB.
 // Refines tile `tile_index` of `plan` and writes its files (each written to a temporary
-// name and renamed, so re-running a tile is safe and gives the same files). Never throws
+// name and renamed, so re-running a tile is safe and replaces them). Never throws
 // for a tile that fails (reason in the result) except Error{kCancelled}.
 TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
                    const std::string& out_dir, const Progress& progress = {},
