@@ -48,5 +48,8 @@ struct MachineInfo {
 };
 MachineInfo ReadMachineInfo();
 double PeakRssMib();  // getrusage(RUSAGE_SELF).ru_maxrss
+// User + system CPU seconds of this process so far (all threads): under a shared, loaded
+// machine this is steadier than wall time.
+double CpuSeconds();
 
 }  // namespace satmesh::cli

@@ -101,8 +101,9 @@ int RunBench(const std::vector<std::string>& argv) {
   report["job"] = job;
   report["overrides"] = overrides;
   const auto refine_start = Clock::now();
+  const double cpu_before_run = CpuSeconds();
   const JobOutputs outputs = RunJobFile(job, (fs::path(out) / "result").string(), overrides);
-  const double run_s = Seconds(refine_start);
+  const double run_s = Seconds(refine_start), run_cpu_s = CpuSeconds() - cpu_before_run;
   const RefineResult& refine = outputs.refine;
   PrintLevels(refine);
 
@@ -126,10 +127,11 @@ int RunBench(const std::vector<std::string>& argv) {
 
   const MachineInfo after = ReadMachineInfo();
   const double total_s = Seconds(start);
-  std::printf("pairs %zu; prepare %.1f s, refine %.1f s, write %.1f s, run %.1f s; total %.1f s; "
-              "peak RSS %.0f MiB; load average %.2f %.2f %.2f\n",
+  std::printf("pairs %zu; prepare %.1f s, refine %.1f s, write %.1f s, run %.1f s (CPU %.1f s = "
+              "%.2f cores); total %.1f s; peak RSS %.0f MiB; load average %.2f %.2f %.2f\n",
               refine.pairs.size(), outputs.prepare_s, refine.total_s, outputs.write_s, run_s,
-              total_s, PeakRssMib(), after.load_1m, after.load_5m, after.load_15m);
+              run_cpu_s, run_cpu_s / std::max(1e-9, run_s), total_s, PeakRssMib(), after.load_1m,
+              after.load_5m, after.load_15m);
 
   if (args.Has("json")) {
     nlohmann::json levels = nlohmann::json::array();
@@ -153,6 +155,8 @@ int RunBench(const std::vector<std::string>& argv) {
     report["prepare_s"] = outputs.prepare_s;
     report["refine_s"] = refine.total_s;
     report["write_s"] = outputs.write_s;
+    report["run_cpu_s"] = run_cpu_s;
+    report["run_s"] = run_s;
     report["total_s"] = total_s;
     report["peak_rss_mib"] = PeakRssMib();
     report["machine_after"] = MachineJson(after);

@@ -1,5 +1,6 @@
 // Micro-benchmarks of the refinement's hot paths (Google Benchmark). Not a ctest test:
-// run build/tests/bench/satmesh_micro_bench by hand (numbers in BENCHMARKS.md).
+// run build/tests/bench/satmesh_micro_bench by hand (numbers in BENCHMARKS.md). Parallel
+// (OpenMP) benchmarks report wall time and the CPU time of all threads.
 // Fixture: a 1024² px view at 0.5 m GSD, 20° off nadir, with a cubic RPC, over a 512 m
 // square of blocky "city" heights meshed at 1 m (0.53 M faces).
 #include <benchmark/benchmark.h>
@@ -151,7 +152,8 @@ void BM_ComputeZnccField(benchmark::State& state) {  // 1 Mpx, window (2r+1)²
     benchmark::DoNotOptimize(ComputeZnccField(a.pixels, b.pixels, valid, kSizePx, kSizePx, options, &workspace));
   state.SetItemsProcessed(state.iterations() * a.pixels.size());
 }
-BENCHMARK(BM_ComputeZnccField)->ArgName("radius")->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ComputeZnccField)->ArgName("radius")->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)
+    ->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_RaySceneIntersect1M(benchmark::State& state) {
   const RayScene scene(CityMesh());
@@ -160,13 +162,13 @@ void BM_RaySceneIntersect1M(benchmark::State& state) {
   for (auto _ : state) scene.Intersect(view.rays.data(), hits.data(), hits.size());
   state.SetItemsProcessed(state.iterations() * hits.size());
 }
-BENCHMARK(BM_RaySceneIntersect1M)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RaySceneIntersect1M)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_RaySceneBuild(benchmark::State& state) {
   for (auto _ : state) RayScene scene(CityMesh());
   state.SetItemsProcessed(state.iterations() * CityMesh().num_faces());
 }
-BENCHMARK(BM_RaySceneBuild)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RaySceneBuild)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_RaySceneUpdateVertices(benchmark::State& state) {
   RayScene scene(CityMesh());
@@ -176,7 +178,7 @@ void BM_RaySceneUpdateVertices(benchmark::State& state) {
     scene.UpdateVertices(vertices);
   }
 }
-BENCHMARK(BM_RaySceneUpdateVertices)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RaySceneUpdateVertices)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_CastHitMap(benchmark::State& state) {
   const RayScene scene(CityMesh());
@@ -184,12 +186,12 @@ void BM_CastHitMap(benchmark::State& state) {
   for (auto _ : state) CastHitMap(scene, &view);
   state.SetItemsProcessed(state.iterations() * view.rays.size());
 }
-BENCHMARK(BM_CastHitMap)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CastHitMap)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_MakeViewLevel(benchmark::State& state) {  // virtual camera + lattice + 1M rays
   for (auto _ : state) benchmark::DoNotOptimize(MakeView(0, 20, 30));
 }
-BENCHMARK(BM_MakeViewLevel)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MakeViewLevel)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_AccumulatePhotometricGradient(benchmark::State& state) {  // one pair-direction
   const TriangleMesh& mesh = CityMesh();
@@ -208,14 +210,14 @@ void BM_AccumulatePhotometricGradient(benchmark::State& state) {  // one pair-di
                                                            &gradient, &touched, &workspace));
   state.SetItemsProcessed(state.iterations() * view_i.rays.size());
 }
-BENCHMARK(BM_AccumulatePhotometricGradient)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_AccumulatePhotometricGradient)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_UmbrellaSquared(benchmark::State& state) {
   const VertexAdjacency adjacency = BuildVertexAdjacency(CityMesh());
   for (auto _ : state) benchmark::DoNotOptimize(UmbrellaSquared(CityMesh().vertices, adjacency));
   state.SetItemsProcessed(state.iterations() * CityMesh().num_vertices());
 }
-BENCHMARK(BM_UmbrellaSquared)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_UmbrellaSquared)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 }  // namespace
 }  // namespace satmesh
