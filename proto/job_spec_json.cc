@@ -248,6 +248,8 @@ json TileResultToJson(const JobPlan& plan, const TileResult& t) {
     return j;
   }
   j["content"] = TileGlbPath(p);
+  j["region"] = Array(t.region);
+  j["transform"] = Array(t.transform);
   j["views"] = t.view_names;
   j["dropped_views"] = t.dropped_views;
   j["pairs"] = t.refine.pairs.size();
@@ -258,6 +260,34 @@ json TileResultToJson(const JobPlan& plan, const TileResult& t) {
   j["levels"] = LevelsToJson(t.refine.levels);
   j["time_s"] = {{"prepare", t.prepare_s}, {"refine", t.refine_s}, {"write", t.write_s}};
   return j;
+}
+
+TileResult TileResultFromJson(const JobPlan& plan, const json& j) {
+  TileResult t;
+  const std::string name = String(j.at("name"), "tile.name");
+  for (size_t i = 0; i < plan.tiles.size() && t.index < 0; ++i)
+    if (plan.tiles[i].Name() == name) t.index = int(i);
+  if (t.index < 0) Bad("tile.name", "'" + name + "' is not a tile of the plan");
+  t.name = name;
+  t.ok = j.at("status") == "successful";
+  if (!t.ok) {
+    t.error = j.at("error").value("message", "");
+    return t;
+  }
+  t.region = j.at("region").get<std::array<double, 6>>();
+  t.transform = j.at("transform").get<std::array<double, 16>>();
+  t.view_names = j.value("views", std::vector<std::string>{});
+  t.dropped_views = j.value("dropped_views", std::vector<std::string>{});
+  t.core_vertices = j.value("vertices", size_t{0});
+  t.core_faces = j.value("faces", size_t{0});
+  t.image_mb = j.value("image_mb", 0.0);
+  t.peak_rss_mb = j.value("peak_rss_mb", 0.0);
+  if (j.contains("time_s")) {
+    t.prepare_s = j["time_s"].value("prepare", 0.0);
+    t.refine_s = j["time_s"].value("refine", 0.0);
+    t.write_s = j["time_s"].value("write", 0.0);
+  }
+  return t;
 }
 
 json TilesetToJson(const Tileset& ts) {

@@ -22,6 +22,10 @@ void ApplyOptionOverride(nlohmann::json* job, const std::string& key_equals_valu
 // Outputs (core structs -> JSON). metrics.json: per tile and totals (+ the single-tile
 // refinement stats at top level, as before tiling). tileset.json: 3D Tiles 1.1.
 nlohmann::json TileResultToJson(const JobPlan& plan, const TileResult& tile);
+// Back from TileResultToJson (what AssembleOutputs needs: status, region, transform,
+// counts, times; not the per-level stats), so a restarted server can assemble tiles
+// finished before. Throws Error{kInvalidArgument} for a tile name not in the plan.
+TileResult TileResultFromJson(const JobPlan& plan, const nlohmann::json& tile);
 nlohmann::json TilesetToJson(const Tileset& tileset);
 nlohmann::json JobMetricsToJson(const JobOutputs& outputs);
 nlohmann::json RefineMetricsToJson(const JobOutputs& outputs);  // = JobMetricsToJson

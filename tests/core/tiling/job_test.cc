@@ -154,6 +154,13 @@ TEST_F(TiledJob, AFailingTileIsReportedAndTheOthersFinish) {
   EXPECT_EQ(metrics["tiles"][1]["status"], "failed");
   EXPECT_EQ(metrics["tiles"][1]["error"]["code"], "invalid-input");
   EXPECT_EQ(o.assembly.tileset.tiles.size(), 2u);
+  // Tile results survive JSON (a restarted server assembles from them).
+  std::vector<TileResult> restored;
+  for (const auto& t : metrics["tiles"]) restored.push_back(proto::TileResultFromJson(o.plan, t));
+  const Assembly again = AssembleOutputs(o.plan, restored, out);
+  EXPECT_EQ(again.faces, o.assembly.faces);
+  EXPECT_EQ(again.tileset.region, o.assembly.tileset.region);
+  EXPECT_EQ(again.tiles_failed, 2);
   EXPECT_TRUE(o.assembly.seams.size() == 1u);  // 0_0 | 0_1 only
 }
 
