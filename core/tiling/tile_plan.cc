@@ -171,8 +171,10 @@ JobPlan PlanJob(const JobSpec& spec) {
                         ? std::max(1, int(std::lround(spec.tiling.tile_size_m / cell)))
                         : std::max(a.width, a.height);
   plan.overlap_cells = int(std::ceil(spec.tiling.overlap_m / cell - 1e-9));
-  plan.nx = (a.width + plan.tile_cells - 1) / plan.tile_cells;
-  plan.ny = (a.height + plan.tile_cells - 1) / plan.tile_cells;
+  // The last column/row takes the remainder: a sliver under half a tile joins its
+  // neighbour (so edges are in [0.5, 1.5) tiles), never a tile of a few cells.
+  plan.nx = std::max(1, (a.width + plan.tile_cells / 2) / plan.tile_cells);
+  plan.ny = std::max(1, (a.height + plan.tile_cells / 2) / plan.tile_cells);
   const auto aoi = MakePolygon(plan.aoi_polygon);
   for (int ty = 0; ty < plan.ny; ++ty) {
     for (int tx = 0; tx < plan.nx; ++tx) {
@@ -180,8 +182,9 @@ JobPlan PlanJob(const JobSpec& spec) {
       tile.x = tx, tile.y = ty;
       const int col0 = a.col0 + tx * plan.tile_cells;
       const int row1 = a.row0 + a.height - ty * plan.tile_cells;  // exclusive, south edge
-      const int row0 = std::max(a.row0, row1 - plan.tile_cells);
-      tile.core_cells = {col0, row0, std::min(plan.tile_cells, a.col0 + a.width - col0), row1 - row0};
+      const int row0 = ty == plan.ny - 1 ? a.row0 : row1 - plan.tile_cells;
+      const int width = tx == plan.nx - 1 ? a.col0 + a.width - col0 : plan.tile_cells;
+      tile.core_cells = {col0, row0, width, row1 - row0};
       const int o = plan.overlap_cells;
       tile.padded_cells = Intersect({col0 - o, row0 - o, tile.core_cells.width + 2 * o,
                                      tile.core_cells.height + 2 * o}, plan.dsm.width, plan.dsm.height);

@@ -49,7 +49,7 @@ struct JobPlan {
 
 // Reads the DSM header, maps the AOI into its CRS (edges densified) and cuts the AOI's
 // bounding cells into tiles of round(tile_size_m / cell) cells (the last row/column
-// shorter), keeping those whose core meets the AOI polygon. tile_size_m = 0 gives one
+// takes the remainder, between half and one and a half tiles), keeping those whose core meets the AOI polygon. tile_size_m = 0 gives one
 // tile over the AOI. Throws Error{kInvalidArgument} naming the field for a bad spec,
 // Error{kInvalidInput} for a geographic or rotated DSM or an AOI outside it.
 JobPlan PlanJob(const JobSpec& spec);

@@ -79,6 +79,17 @@ TEST(PlanJob, CoresPartitionTheAoiAndPaddingAddsTheOverlap) {
   EXPECT_EQ(sw.Name(), "0_0");
 }
 
+TEST(PlanJob, ASliverUnderHalfATileJoinsItsNeighbour) {
+  JobSpec spec = Spec(WriteTestDsm("sliver"));
+  spec.tiling.tile_size_m = 16.5;  // 33 cells: 100 = 33 + 33 + 34, 80 = 33 + 47
+  const JobPlan plan = PlanJob(spec);
+  EXPECT_EQ(plan.nx, 3);
+  EXPECT_EQ(plan.ny, 2);
+  EXPECT_EQ(plan.tiles[plan.IndexOf(2, 0)].core_cells.width, 34);
+  EXPECT_EQ(plan.tiles[plan.IndexOf(0, 1)].core_cells.height, 47);
+  EXPECT_EQ(plan.tiles[plan.IndexOf(0, 1)].core_cells.row0, 0);
+}
+
 TEST(PlanJob, PolygonAoiKeepsTheTilesItMeets) {
   JobSpec spec = Spec(WriteTestDsm("poly"));
   spec.tiling.tile_size_m = 20;
