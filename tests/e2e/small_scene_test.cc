@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <string>
+
+#include <unistd.h>
 
 #include "core/eval/scene_eval.h"
 #include "core/synth/scene_writer.h"
@@ -15,7 +18,8 @@ namespace satmesh {
 namespace {
 
 TEST(EndToEnd, SmallSyntheticSceneRefinesBeyondTheInitialDsm) {
-  const auto dir = std::filesystem::temp_directory_path() / "satmesh_e2e_small";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("satmesh_e2e_small_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const std::string scene = (dir / "scene").string(), result = (dir / "result").string();
   synth::SynthOptions options = synth::SynthPreset("small", /*seed=*/1);

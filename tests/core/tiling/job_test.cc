@@ -5,6 +5,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
+
+#include <unistd.h>
 
 #include "core/dsm/dsm.h"
 #include "core/geo/crs.h"
@@ -29,7 +32,8 @@ class TiledJob : public ::testing::Test {
     o.num_views = 3;
     o.render.supersample = 1;
     o.write_preview = false;
-    scene_ = (fs::temp_directory_path() / "tiling_tiny_scene").string();
+    // Per process: ctest runs each test of this suite as its own process, in parallel.
+    scene_ = (fs::temp_directory_path() / ("tiling_tiny_scene_" + std::to_string(::getpid()))).string();
     fs::remove_all(scene_);
     synth::GenerateScene(scene_, o);
   }
@@ -46,7 +50,8 @@ class TiledJob : public ::testing::Test {
     return spec;
   }
   static std::string OutDir(const std::string& name) {
-    const auto dir = fs::temp_directory_path() / ("tiling_job_" + name);
+    const auto dir =
+        fs::temp_directory_path() / ("tiling_job_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     return dir.string();
   }
