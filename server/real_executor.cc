@@ -7,6 +7,7 @@
 #include "core/common/error.h"
 #include "core/image/image_io.h"
 #include "core/mesh/mesh_io.h"
+#include "core/tiling/job.h"
 #include "proto/job_spec_json.h"
 #include "server/api_documents.h"
 
@@ -34,6 +35,34 @@ json BoundingBox(const TriangleMesh& mesh) {
   }
   const Eigen::Vector3f c = (lo + hi) / 2, h = (hi - lo) / 2;
   return json::array({c.x(), c.y(), c.z(), h.x(), 0, 0, 0, h.y(), 0, 0, 0, h.z()});
+}
+
+template <size_t N>
+std::array<double, N> ArrayFrom(const json& j) {
+  std::array<double, N> a{};
+  for (size_t i = 0; i < N && i < j.size(); ++i) a[i] = j[i].get<double>();
+  return a;
+}
+
+// The persisted tile record back into what AssembleOutputs reads.
+TileResult TileFromJson(const JobPlan& plan, const json& j) {
+  TileResult t;
+  t.index = plan.IndexOf(j.at("x"), j.at("y"));
+  SATMESH_CHECK(t.index >= 0, ErrorCode::kInternal, "tile " + j.value("name", std::string("?")) + " is not in the plan");
+  t.name = j.value("name", plan.tiles[t.index].Name());
+  t.ok = true;
+  t.region = ArrayFrom<6>(j.at("region"));
+  t.transform = ArrayFrom<16>(j.at("transform"));
+  t.core_vertices = j.value("vertices", size_t{0});
+  t.core_faces = j.value("faces", size_t{0});
+  t.view_names = j.value("views", std::vector<std::string>{});
+  t.image_mb = j.value("image_mb", 0.0);
+  if (j.contains("time_s")) {
+    t.prepare_s = j["time_s"].value("prepare", 0.0);
+    t.refine_s = j["time_s"].value("refine", 0.0);
+    t.write_s = j["time_s"].value("write", 0.0);
+  }
+  return t;
 }
 
 }  // namespace
@@ -74,33 +103,43 @@ ExecutionPlan RealExecutor::Plan(const JobSpec& spec) {
     plan.pixels += int64_t(info.width) * info.height;
   }
   InfoFor(spec.initial_dsm, "initial.dsm");
-  plan.tiles = {TileKey{0, 0}};  // core RunJob refines the whole AOI as one tile
+  for (const PlannedTile& tile : PlanJob(spec).tiles) plan.tiles.push_back({tile.x, tile.y});
   return plan;
 }
 
-json RealExecutor::RunTile(const JobSpec& spec, const TileKey& tile, const std::string& job_dir,
+json RealExecutor::RunTile(const JobSpec& spec, const TileKey& key, const std::string& job_dir,
                            const Progress& progress) {
-  const fs::path work = fs::path(job_dir) / "work" / tile.Name();
-  fs::create_directories(work);
-  fs::create_directories(fs::path(job_dir) / "tiles");
-  const JobOutputs outputs = RunJob(spec, work.string(), progress);
-  WriteFileAtomic((work / "metrics.json").string(), proto::RefineMetricsToJson(outputs).dump(2));
-  const fs::path glb = fs::path(job_dir) / "tiles" / (tile.Name() + ".glb");
-  const fs::path tmp = fs::path(job_dir) / "tiles" / (".partial." + tile.Name() + ".glb");
-  WriteMesh(tmp.string(), ReadMesh(outputs.mesh_path));
-  fs::rename(tmp, glb);
-  return {{"work", "work/" + tile.Name()}};
+  const JobPlan plan = PlanJob(spec);
+  const int index = plan.IndexOf(key.x, key.y);
+  SATMESH_CHECK(index >= 0, ErrorCode::kInternal, "tile " + key.Name() + " is not in the job's plan");
+  const TileResult result = satmesh::RunTile(spec, plan, index, job_dir, progress);
+  if (!result.ok) ThrowError(result.error_code, result.error);
+  json record = proto::TileResultToJson(plan, result);
+  record["region"] = result.region;
+  record["transform"] = result.transform;
+  return record;
 }
 
 json RealExecutor::Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
                             const std::vector<json>& tile_results, const std::string& job_dir) {
-  SATMESH_CHECK(tiles.size() == 1, ErrorCode::kInternal, "the single-tile runner got several tiles");
-  const fs::path dir(job_dir), work = dir / "work" / tiles[0].Name();
-  json metrics = ReadJsonFile((work / "metrics.json").string());
-  for (const char* file : {"mesh.ply", "dsm.tif"}) fs::copy_file(work / file, dir / file, fs::copy_options::overwrite_existing);
-  metrics["outputs"]["tileset"] = "tileset.json";
-  WriteTileset(job_dir, tiles);
-  WriteFileAtomic((dir / "metrics.json").string(), metrics.dump(2));
+  JobOutputs outputs;
+  outputs.plan = PlanJob(spec);
+  for (const json& r : tile_results) outputs.tiles.push_back(TileFromJson(outputs.plan, r));
+  outputs.assembly = AssembleOutputs(outputs.plan, outputs.tiles, job_dir);
+  outputs.mesh_path = outputs.assembly.mesh_path;
+  outputs.dsm_path = outputs.assembly.dsm_path;
+  if (outputs.tiles.size() == 1) outputs.view_names = outputs.tiles[0].view_names;
+  json metrics = proto::JobMetricsToJson(outputs);
+  json full_tiles = json::array();  // as recorded when each tile ran (with its levels)
+  for (json r : tile_results) {
+    r.erase("region");
+    r.erase("transform");
+    full_tiles.push_back(r);
+  }
+  metrics["tiles"] = full_tiles;
+  WriteFileAtomic((fs::path(job_dir) / "tileset.json").string(),
+                  proto::TilesetToJson(outputs.assembly.tileset).dump(2));
+  WriteFileAtomic((fs::path(job_dir) / "metrics.json").string(), metrics.dump(2));
   return metrics;
 }
 

@@ -4,9 +4,10 @@
 
 namespace satmesh::server {
 
-// Today one tile per job (core RunJob); writes per tile job_dir/work/<tile>/ (mesh.ply,
-// dsm.tif, metrics.json) and job_dir/tiles/<tile>.glb (Draco); Assemble writes
-// tileset.json (3D Tiles 1.1), metrics.json, mesh.ply and dsm.tif into job_dir.
+// The tiled pipeline of core/tiling: Plan = PlanJob (DSM header only, so RunTile and
+// Assemble re-plan instead of keeping state), RunTile = core RunTile into job_dir
+// (tiles/<x>_<y>.glb, .ply, .tif), Assemble = AssembleOutputs (mesh.ply, dsm.tif) plus
+// tileset.json and metrics.json written through proto/.
 class RealExecutor : public JobExecutor {
  public:
   ExecutionPlan Plan(const JobSpec& spec) override;

@@ -10,40 +10,11 @@
 #include <map>
 #include <set>
 
+#include "tests/server/process_util.h"
 #include "tests/server/test_server.h"
 
 namespace satmesh::server::testing {
 namespace {
-
-struct Child {
-  pid_t pid = -1;
-  int port = 0;
-};
-
-// Starts the stub server and reads "listening on port N" from its stdout.
-Child Spawn(const std::string& dir) {
-  int out[2];
-  if (pipe(out) != 0) return {};
-  const pid_t pid = fork();
-  if (pid == 0) {
-    dup2(out[1], STDOUT_FILENO);
-    close(out[0]);
-    const std::string data = dir + "/data", root = dir + "/root";
-    execl(SATMESH_STUB_SERVER, SATMESH_STUB_SERVER, "--port", "0", "--data-dir", data.c_str(),
-          "--data-root", root.c_str(), "--workers", "2", "--stub-tiles-x", "4", "--stub-tiles-y", "2",
-          "--stub-tile-ms", "300", static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  close(out[1]);
-  FILE* f = fdopen(out[0], "r");
-  char line[256] = {0};
-  Child child{pid, 0};
-  while (fgets(line, sizeof line, f)) {
-    if (std::sscanf(line, "listening on port %d", &child.port) == 1) break;
-  }
-  // Keep the pipe open (closing could SIGPIPE the child's later prints).
-  return child;
-}
 
 TEST(Process, KillDashNineMidJobThenRestartCompletesEveryTileOnce) {
   const std::string dir = TempDir("kill9");
