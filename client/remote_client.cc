@@ -37,6 +37,8 @@ struct RemoteClient::Impl {
   Impl(const std::string& s, const std::string& token) : server(s), http(s) {
     http.set_connection_timeout(5, 0);
     http.set_read_timeout(60, 0);
+    http.set_keep_alive(true);
+    http.set_tcp_nodelay(true);
     if (!token.empty()) http.set_bearer_token_auth(token);
   }
   void Check(const httplib::Result& r, const std::string& what, bool allow_error) const {

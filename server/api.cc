@@ -233,6 +233,11 @@ struct ApiServer::Impl {
 
   void Hooks() {
     http.set_payload_max_length(options.max_body_bytes);
+    // Pollers keep their connection (httplib's default closes it every 5 requests, and
+    // reconnect bursts overflow its short listen backlog: 1 s SYN retries).
+    http.set_keep_alive_max_count(1000);
+    http.set_keep_alive_timeout(30);
+    http.set_tcp_nodelay(true);  // no Nagle/delayed-ACK 40 ms stalls on kept-alive connections
     http.new_task_queue = [n = options.http_threads] { return new httplib::ThreadPool(size_t(n)); };
     http.set_exception_handler([](const httplib::Request& req, httplib::Response& res, std::exception_ptr error) {
       const Problem p = ProblemFromException(error);

@@ -24,6 +24,8 @@ TEST(Load, TwentyClientsPollWhileTilesRun) {
   for (int i = 0; i < kClients; ++i) {
     threads.emplace_back([&, i] {
       auto c = s.Client();
+      c.set_tcp_nodelay(true);
+      c.set_keep_alive(true);  // a poller keeps its connection (httplib's client default is one per request)
       for (int n = 0; n < 2000 && !finished; ++n) {  // bounded
         const auto t0 = std::chrono::steady_clock::now();
         auto r = c.Get(("/jobs/" + id).c_str());
@@ -35,13 +37,21 @@ TEST(Load, TwentyClientsPollWhileTilesRun) {
     });
   }
   for (auto& t : threads) t.join();
-  std::vector<double> all;
-  for (const auto& v : latency_ms) all.insert(all.end(), v.begin(), v.end());
+  // All requests, and without each client's first (its TCP connect: httplib listens with
+  // a backlog of 5, so a burst of 20 connects can wait for a 1 s SYN retry; clients that
+  // open a connection per request see that too).
+  std::vector<double> all, steady;
+  for (const auto& v : latency_ms) {
+    all.insert(all.end(), v.begin(), v.end());
+    if (v.size() > 1) steady.insert(steady.end(), v.begin() + 1, v.end());
+  }
   std::sort(all.begin(), all.end());
-  ASSERT_FALSE(all.empty());
-  const auto pct = [&](double p) { return all[std::min(all.size() - 1, size_t(p * double(all.size())))]; };
-  std::printf("[ latency ] %d clients, %zu status requests while 8 tiles ran: p50 %.2f ms, p99 %.2f ms, max %.2f ms\n",
-              kClients, all.size(), pct(0.5), pct(0.99), all.back());
+  std::sort(steady.begin(), steady.end());
+  ASSERT_FALSE(steady.empty());
+  const auto pct = [](const std::vector<double>& x, double p) { return x[std::min(x.size() - 1, size_t(p * double(x.size())))]; };
+  std::printf("[ latency ] %d clients, %zu status requests while 8 tiles ran: p50 %.2f ms, p99 %.2f ms, max %.2f ms; "
+              "after connect: p50 %.2f ms, p99 %.2f ms, max %.2f ms\n", kClients, all.size(), pct(all, 0.5),
+              pct(all, 0.99), all.back(), pct(steady, 0.5), pct(steady, 0.99), steady.back());
   EXPECT_EQ(failures.load(), 0);
   EXPECT_TRUE(finished.load());
 }
