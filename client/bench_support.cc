@@ -57,19 +57,6 @@ void LevelBox(const RefineInput& input, const TriangleMesh& mesh, Eigen::Vector3
 
 }  // namespace
 
-JobSpec ReadJobWithOverrides(const std::string& job_path, const std::vector<std::string>& overrides) {
-  std::ifstream in(job_path);
-  SATMESH_CHECK(in.good(), ErrorCode::kNotFound, "job file '" + job_path + "' cannot be opened");
-  nlohmann::json job;
-  try {
-    job = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    ThrowError(ErrorCode::kInvalidArgument, "job file '" + job_path + "': invalid JSON: " + e.what());
-  }
-  for (const auto& o : overrides) proto::ApplyOptionOverride(&job, o);
-  return proto::JobSpecFromJson(job, std::filesystem::path(job_path).parent_path().string());
-}
-
 TileInput PrepareJobInput(const JobSpec& spec) {
   const Dsm dsm = ReadDsm(spec.initial_dsm);
   const double cell = std::abs(dsm.geo_transform[1]);

@@ -6,13 +6,11 @@
 #include <utility>
 #include <vector>
 
+#include "client/refine_runner.h"  // ReadJobWithOverrides
 #include "core/tiling/job.h"
 #include "core/tiling/tile_input.h"
 
 namespace satmesh::cli {
-
-// The job file with --set overrides applied, parsed as `satmesh refine` parses it.
-JobSpec ReadJobWithOverrides(const std::string& job_path, const std::vector<std::string>& overrides);
 
 // The refinement input RunJob builds for `spec` (same frame, windows and coarse cell).
 TileInput PrepareJobInput(const JobSpec& spec);

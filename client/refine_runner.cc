@@ -6,13 +6,14 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
+
 #include "core/common/error.h"
 #include "proto/job_spec_json.h"
 
 namespace satmesh::cli {
 
-JobOutputs RunJobFile(const std::string& job_path, const std::string& out_dir,
-                      const std::vector<std::string>& overrides) {
+JobSpec ReadJobWithOverrides(const std::string& job_path, const std::vector<std::string>& overrides) {
   std::ifstream in(job_path);
   SATMESH_CHECK(in.good(), ErrorCode::kNotFound, "job file '" + job_path + "' cannot be opened");
   nlohmann::json job;
@@ -22,13 +23,24 @@ JobOutputs RunJobFile(const std::string& job_path, const std::string& out_dir,
     ThrowError(ErrorCode::kInvalidArgument, "job file '" + job_path + "': invalid JSON: " + e.what());
   }
   for (const auto& o : overrides) proto::ApplyOptionOverride(&job, o);
-  const JobSpec spec =
-      proto::JobSpecFromJson(job, std::filesystem::path(job_path).parent_path().string());
+  return proto::JobSpecFromJson(job, std::filesystem::path(job_path).parent_path().string());
+}
 
+JobOutputs RunJobFile(const std::string& job_path, const std::string& out_dir,
+                      const std::vector<std::string>& overrides) {
+  const JobSpec spec = ReadJobWithOverrides(job_path, overrides);
+  // A live line on a terminal; in logs (CI, pipes) one line per 10%.
+  const bool tty = ::isatty(::fileno(stderr));
   Progress progress;
-  progress.on_progress = [](double fraction, const std::string& stage) {
-    std::fprintf(stderr, "\r[%3d%%] %-24s", int(100 * fraction), stage.c_str());
-    if (fraction >= 1.0) std::fprintf(stderr, "\n");
+  progress.on_progress = [tty, last = -1](double fraction, const std::string& stage) mutable {
+    const int percent = int(100 * fraction);
+    if (tty) {
+      std::fprintf(stderr, "\r[%3d%%] %-24s", percent, stage.c_str());
+      if (fraction >= 1.0) std::fprintf(stderr, "\n");
+    } else if (percent / 10 != last / 10) {
+      std::fprintf(stderr, "[%3d%%] %s\n", percent, stage.c_str());
+    }
+    last = percent;
   };
   JobOutputs outputs = RunJob(spec, out_dir, progress);
   proto::WriteJobJson(outputs, out_dir);

@@ -8,6 +8,10 @@
 
 namespace satmesh::cli {
 
+// Reads a job file and applies --set overrides (hrefs relative to the job file). Throws
+// Error naming the file or the field.
+JobSpec ReadJobWithOverrides(const std::string& job_path, const std::vector<std::string>& overrides);
+
 // Reads the job, applies --set overrides, runs it into out_dir (mesh.ply, dsm.tif, tiles/)
 // and writes out_dir/tileset.json and out_dir/metrics.json.
 JobOutputs RunJobFile(const std::string& job_path, const std::string& out_dir,
