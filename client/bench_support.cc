@@ -39,22 +39,6 @@ TriangleMesh IntoFrame(const TriangleMesh& mesh, const std::string& crs, const L
   return out;
 }
 
-// The box MakeViewLevels uses for a level: mesh extent +-10 m, height range with margins.
-void LevelBox(const RefineInput& input, const TriangleMesh& mesh, Eigen::Vector3d* box_min,
-              Eigen::Vector3d* box_max) {
-  const double margin = 2.0 + 0.1 * (input.max_z - input.min_z);
-  *box_min = Eigen::Vector3d::Constant(1e30);
-  *box_max = -*box_min;
-  for (const auto& p : mesh.vertices) {
-    *box_min = box_min->cwiseMin(p.cast<double>());
-    *box_max = box_max->cwiseMax(p.cast<double>());
-  }
-  *box_min -= Eigen::Vector3d(10, 10, 0);
-  *box_max += Eigen::Vector3d(10, 10, 0);
-  box_min->z() = std::min(box_min->z(), input.min_z) - margin;
-  box_max->z() = std::max(box_max->z(), input.max_z) + margin;
-}
-
 }  // namespace
 
 TileInput PrepareJobInput(const JobSpec& spec) {
@@ -101,7 +85,7 @@ std::vector<std::pair<int, int>> ParsePairs(const std::string& text, int num_vie
 RaycastTiming TimeRaycast(const RefineInput& input, const TriangleMesh& mesh,
                           const std::vector<int>& views, int level, int grid_px, int repeats) {
   Eigen::Vector3d box_min, box_max;
-  LevelBox(input, mesh, &box_min, &box_max);
+  SurfaceBox(mesh, input.min_z, input.max_z, &box_min, &box_max);  // as MakeViewLevels
   std::vector<ViewLevel> levels;
   for (int v : views) {
     const ImageF& full = input.views[v].image;

@@ -113,17 +113,8 @@ std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
                                       const std::vector<std::pair<int, int>>& pairs,
                                       const TriangleMesh& mesh, int level, int grid_px,
                                       std::vector<int>* slot) {
-  // The box the surface lives in: the mesh's extent, the input's height range, margins.
-  const double margin = 2.0 + 0.1 * (input.max_z - input.min_z);
-  Eigen::Vector3d box_min = Eigen::Vector3d::Constant(1e30), box_max = -box_min;
-  for (const auto& p : mesh.vertices) {
-    box_min = box_min.cwiseMin(p.cast<double>());
-    box_max = box_max.cwiseMax(p.cast<double>());
-  }
-  box_min -= Eigen::Vector3d(10, 10, 0);
-  box_max += Eigen::Vector3d(10, 10, 0);
-  box_min.z() = std::min(box_min.z(), input.min_z) - margin;
-  box_max.z() = std::max(box_max.z(), input.max_z) + margin;
+  Eigen::Vector3d box_min, box_max;
+  SurfaceBox(mesh, input.min_z, input.max_z, &box_min, &box_max);
   slot->assign(sources.size(), -1);
   std::vector<ViewLevel> views;
   for (const auto& [i, j] : pairs) {

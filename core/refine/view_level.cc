@@ -1,8 +1,24 @@
 #include "core/refine/view_level.h"
 
+#include <algorithm>
 #include <utility>
 
 namespace satmesh {
+
+void SurfaceBox(const TriangleMesh& mesh, double min_z, double max_z, Eigen::Vector3d* box_min,
+                Eigen::Vector3d* box_max) {
+  const double margin = 2.0 + 0.1 * (max_z - min_z);
+  *box_min = Eigen::Vector3d::Constant(1e30);
+  *box_max = -*box_min;
+  for (const auto& p : mesh.vertices) {
+    *box_min = box_min->cwiseMin(p.cast<double>());
+    *box_max = box_max->cwiseMax(p.cast<double>());
+  }
+  *box_min -= Eigen::Vector3d(10, 10, 0);
+  *box_max += Eigen::Vector3d(10, 10, 0);
+  box_min->z() = std::min(box_min->z(), min_z) - margin;
+  box_max->z() = std::max(box_max->z(), max_z) + margin;
+}
 
 ViewLevel MakeViewLevel(int view, int level, ImageF image_level, const RpcModel& rpc_window,
                         const LocalFrame& frame, const Eigen::Vector3d& box_min,

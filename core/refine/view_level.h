@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "core/image/image.h"
+#include "core/mesh/mesh.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/projection_grid.h"
 #include "core/refine/virtual_camera.h"
@@ -29,6 +30,12 @@ struct ViewLevel {
   int width() const { return image.width; }
   int height() const { return image.height; }
 };
+
+// The box the surface lives in for a level's rays and projection lattice: the mesh's
+// extent +-10 m horizontally, the height range [min_z, max_z] (widened to the mesh) with
+// a margin of 2 m + 10% of the range.
+void SurfaceBox(const TriangleMesh& mesh, double min_z, double max_z, Eigen::Vector3d* box_min,
+                Eigen::Vector3d* box_max);
 
 // Builds the level data (rays from the virtual camera, projection lattice over the box
 // [box_min, box_max] of the frame) of one view. The box's z range bounds the rays.
