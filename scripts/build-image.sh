@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# Builds the satmesh container image (docker/Dockerfile) with buildah on a machine that has
+# no Docker engine and no registry: the Debian 12 base image is made locally with
+# debootstrap from the host's configured Debian archive. Idempotent: installs the host
+# tools and makes the base image only when missing; --layers reuses unchanged stages.
+# Run as root.
+#
+#   scripts/build-image.sh [--tag localhost/satmesh:latest] [--base localhost/debian:12-slim]
+#                          [--jobs 2] [--mirror URL] [--rebuild-base]
+set -euo pipefail
+here="$(cd "$(dirname "$0")/.." && pwd)"
+
+tag="localhost/satmesh:latest"   # image to build
+base="localhost/debian:12-slim"  # local Debian 12 base image (FROM of both stages)
+jobs=2                           # compile jobs inside the image build (ninja -j)
+mirror=""                        # Debian mirror for debootstrap; default: the host's
+rebuild_base=0                   # 1: remake the base image even if present
+
+usage() { sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --tag) tag="$2"; shift 2 ;;
+    --base) base="$2"; shift 2 ;;
+    --jobs) jobs="$2"; shift 2 ;;
+    --mirror) mirror="$2"; shift 2 ;;
+    --rebuild-base) rebuild_base=1; shift ;;
+    -h|--help) usage ;;
+    *) echo "build-image: unknown argument '$1'" >&2; usage ;;
+  esac
+done
+[ "$(id -u)" -eq 0 ] || { echo "build-image: run as root (debootstrap, buildah mount)" >&2; exit 2; }
+case "$jobs" in ''|*[!0-9]*) echo "build-image: --jobs '$jobs' is not a positive integer" >&2; exit 2 ;; esac
+
+# Host tools (not project dependencies: docker/deps-debian12.txt is what the image installs).
+install_host_tools() {
+  local missing="" p
+  for p in buildah debootstrap uidmap; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
+  done
+  [ -z "$missing" ] && return 0
+  echo "build-image: installing host tools:$missing"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends $missing
+}
+
+# overlay where the kernel allows it, else vfs (slower, always works).
+pick_storage_driver() {
+  [ -n "${STORAGE_DRIVER:-}" ] && return 0
+  local ctr
+  if ctr=$(buildah from scratch 2>/dev/null) && buildah mount "$ctr" >/dev/null 2>&1; then
+    buildah umount "$ctr" >/dev/null; buildah rm "$ctr" >/dev/null
+  else
+    [ -n "${ctr:-}" ] && buildah rm "$ctr" >/dev/null 2>&1 || true
+    echo "build-image: overlay storage does not work here, using vfs"
+    export STORAGE_DRIVER=vfs
+  fi
+}
+
+# The host's Debian apt sources: enabled files that name a .../debian URI.
+host_source_files() {
+  grep -lE '^(URIs:|deb )[^#]*https?://[^ ]*/debian' \
+    /etc/apt/sources.list /etc/apt/sources.list.d/*.sources /etc/apt/sources.list.d/*.list 2>/dev/null || true
+}
+
+host_mirror() {
+  host_source_files | xargs -r grep -hoE 'https?://[^ ]*/debian/?( |$)' | head -1 | tr -d ' '
+}
+
+make_base_image() {
+  [ -n "$mirror" ] || mirror="$(host_mirror)"
+  [ -n "$mirror" ] || { echo "build-image: no Debian mirror in /etc/apt (use --mirror URL)" >&2; exit 1; }
+  local rootfs ctr mnt f
+  rootfs="$(mktemp -d /tmp/satmesh-rootfs.XXXXXX)"
+  trap 'findmnt -rn -o TARGET | grep -q "^'"$rootfs"'" || rm -rf "'"$rootfs"'"' EXIT
+  echo "build-image: debootstrap bookworm from $mirror into $rootfs"
+  debootstrap --variant=minbase bookworm "$rootfs" "$mirror" >"$rootfs.log" 2>&1 \
+    || { tail -20 "$rootfs.log" >&2; exit 1; }
+  rm -f "$rootfs.log"
+  # apt inside the image uses the host's sources and archive settings (e.g. a snapshot
+  # archive whose Release files are past Valid-Until).
+  rm -f "$rootfs/etc/apt/sources.list"
+  for f in $(host_source_files); do cp "$f" "$rootfs/etc/apt/sources.list.d/"; done
+  apt-config dump | grep -E '^Acquire::Check-(Valid-Until|Date) ' \
+    > "$rootfs/etc/apt/apt.conf.d/99host-archive" || true
+  rm -rf "$rootfs"/var/lib/apt/lists/* "$rootfs"/var/cache/apt/archives/*.deb \
+         "$rootfs"/var/cache/apt/*.bin "$rootfs"/var/log/*.log "$rootfs"/tmp/*
+  : > "$rootfs/etc/resolv.conf"; : > "$rootfs/etc/hostname"
+  ctr=$(buildah from scratch)
+  mnt=$(buildah mount "$ctr")
+  cp -a "$rootfs"/. "$mnt"/
+  buildah umount "$ctr" >/dev/null
+  buildah config --env PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
+    --cmd /bin/bash --label "org.opencontainers.image.source=debootstrap bookworm $mirror" "$ctr"
+  buildah commit --rm -q "$ctr" "$base" >/dev/null
+  echo "build-image: base image $base created"
+}
+
+install_host_tools
+pick_storage_driver
+if [ "$rebuild_base" -eq 1 ] || ! buildah inspect --type image "$base" >/dev/null 2>&1; then
+  make_base_image
+else
+  echo "build-image: base image $base present"
+fi
+
+echo "build-image: building $tag (niced, -j$jobs)"
+cd "$here"
+nice -n 10 buildah bud --isolation chroot --layers --pull=never \
+  --build-arg DEBIAN_IMAGE="$base" --build-arg BUILD_JOBS="$jobs" \
+  -f docker/Dockerfile -t "$tag" .
+buildah images --format '{{.Name}}:{{.Tag}} {{.Size}}' "$tag"

@@ -1,0 +1,113 @@
+#!/usr/bin/env bash
+# Smoke test of the satmesh image (scripts/build-image.sh) without a container engine:
+# buildah runs satmesh-server from the image (chroot isolation, host loopback) with a data
+# dir and an input root; checks /health and /processes, submits the small synthetic job
+# with the image's own CLI, downloads its results, then stops the server. Exits non-zero
+# on the first failure. Run as root.
+#
+#   scripts/smoke-image.sh [--tag localhost/satmesh:latest] [--port 18080] [--no-job]
+#                          [--iterations 5] [--keep]
+set -euo pipefail
+
+tag="localhost/satmesh:latest"  # image to test
+port=18080                      # loopback port of the server
+job=1                           # 1: submit the small synthetic job and fetch its results
+iterations=5                    # refinement iterations per level of that job (speed)
+keep=0                          # 1: keep the work folder (data dir, inputs, logs)
+
+usage() { sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --tag) tag="$2"; shift 2 ;;
+    --port) port="$2"; shift 2 ;;
+    --no-job) job=0; shift ;;
+    --iterations) iterations="$2"; shift 2 ;;
+    --keep) keep=1; shift ;;
+    -h|--help) usage ;;
+    *) echo "smoke-image: unknown argument '$1'" >&2; usage ;;
+  esac
+done
+[ "$(id -u)" -eq 0 ] || { echo "smoke-image: run as root (buildah)" >&2; exit 2; }
+
+url="http://127.0.0.1:$port"
+work="$(mktemp -d /tmp/satmesh-smoke.XXXXXX)"
+mkdir "$work/data" "$work/inputs"
+chown 10001 "$work/data" "$work/inputs"  # the image's non-root user
+srv="" cli="" server_pid=""
+
+fail() { echo "smoke-image: FAIL: $*" >&2; [ -f "$work/server.log" ] && tail -20 "$work/server.log" >&2; exit 1; }
+
+# The server process under `buildah run` (its descendant), so that it gets the SIGTERM.
+server_process() {
+  local pids="$1" all="" next
+  while [ -n "$pids" ]; do
+    all="$all $pids"
+    next=""
+    for p in $pids; do next="$next $(pgrep -P "$p" || true)"; done
+    pids="$(echo $next)"
+  done
+  for p in $all; do
+    [ "$(cat /proc/"$p"/comm 2>/dev/null)" = "satmesh-server" ] && { echo "$p"; return; }
+  done
+}
+
+stop_server() {
+  [ -n "$server_pid" ] || return 0
+  local p; p="$(server_process "$server_pid")"
+  [ -n "$p" ] && kill -TERM "$p" 2>/dev/null
+  for _ in $(seq 50); do kill -0 "$server_pid" 2>/dev/null || break; sleep 0.2; done
+  kill -0 "$server_pid" 2>/dev/null && kill -KILL "$server_pid" 2>/dev/null
+  wait "$server_pid" 2>/dev/null || true
+  server_pid=""
+}
+
+cleanup() {
+  stop_server
+  for c in $srv $cli; do buildah rm "$c" >/dev/null 2>&1 || true; done
+  if [ "$keep" -eq 1 ]; then echo "smoke-image: kept $work"; else rm -rf "$work"; fi
+}
+trap cleanup EXIT
+
+buildah inspect --type image "$tag" >/dev/null 2>&1 || fail "no image $tag (run scripts/build-image.sh)"
+srv=$(buildah from --pull=never "$tag")
+cli=$(buildah from --pull=never "$tag")
+in_client() { buildah run --isolation chroot -v "$work/inputs:/inputs" "$cli" -- "$@"; }
+
+echo "smoke-image: user $(buildah run --isolation chroot "$srv" -- id -un), $(in_client satmesh-server --help | head -1)"
+curl -s -o /dev/null "$url/health" && fail "port $port is already in use"
+
+buildah run --isolation chroot -v "$work/data:/data" -v "$work/inputs:/inputs:ro" "$srv" -- \
+  satmesh-server --host 127.0.0.1 --port "$port" --data-dir /data --data-root /inputs \
+  --proto-dir /usr/local/share/satmesh/proto --workers 2 >"$work/server.log" 2>&1 &
+server_pid=$!
+for _ in $(seq 100); do
+  curl -fsS -o /dev/null "$url/health" 2>/dev/null && break
+  kill -0 "$server_pid" 2>/dev/null || fail "the server exited"
+  sleep 0.3
+done
+health=$(curl -fsS "$url/health") || fail "GET /health"
+echo "smoke-image: GET /health -> $health"
+curl -fsS "$url/processes" | grep -q '"refine-mesh"' || fail "GET /processes does not list refine-mesh"
+echo "smoke-image: GET /processes lists refine-mesh"
+
+if [ "$job" -eq 1 ]; then
+  # Scene at the input root: the job's relative hrefs resolve against the server's data root.
+  in_client satmesh synth --preset small --out /inputs >"$work/synth.log" 2>&1 || fail "satmesh synth"
+  [ -f "$work/inputs/job.json" ] || fail "synth wrote no job.json"
+  id=$(in_client satmesh submit /inputs/job.json --server "$url" --wait --quiet \
+       --set "options.iterations_per_level=$iterations" 2>"$work/submit.log") \
+    || { cat "$work/submit.log" >&2; fail "job did not succeed"; }
+  echo "smoke-image: job $id: $(tail -1 "$work/submit.log")"
+  in_client satmesh results "$id" --server "$url" --out /inputs/result >"$work/results.log" 2>&1 \
+    || { cat "$work/results.log" >&2; fail "satmesh results"; }
+  for f in tileset.json metrics.json; do
+    [ -s "$work/inputs/result/$f" ] || fail "results: no $f"
+  done
+  ls "$work/inputs/result/tiles/"*.glb >/dev/null 2>&1 || fail "results: no tiles/*.glb"
+  [ "$(stat -c %u "$work/data/jobs" 2>/dev/null || stat -c %u "$work/data")" = 10001 ] \
+    || fail "the server did not write its data as uid 10001"
+  echo "smoke-image: results: $(ls "$work/inputs/result" | tr '\n' ' ')"
+fi
+
+stop_server
+echo "smoke-image: OK ($tag)"
