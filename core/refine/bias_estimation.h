@@ -1,0 +1,48 @@
+#pragma once
+// Per-image RPC bias estimation (DESIGN.md: a bias shift (col, row) in pixels per image,
+// as in the paper). One reference view is held fixed; every other view, in breadth-first
+// order over the pair graph, gets the 2D shift that maximises the mean ZNCC of the views
+// already solved warped into it through the INITIAL surface (which stays fixed): a grid
+// search at a coarse pyramid level, then quadratic fits on 3x3 grids down to full
+// resolution. Biases are relative to the reference view (a common shift is not observable).
+#include <Eigen/Core>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/refine/refine.h"
+
+namespace satmesh {
+
+struct BiasOptions {
+  int reference_view = -1;         // view held at zero; -1: the one in most pairs (first on ties)
+  int coarse_level = 2;            // pyramid level of the grid search (reduced for small images), [0, 6]
+  double search_radius_px = 6.0;   // grid search over +-radius per axis, full-res px, > 0
+  double coarse_step_px = 2.0;     // grid spacing of the search, full-res px, > 0
+  double final_step_px = 0.125;    // smallest 3x3 spacing at full resolution, full-res px, > 0
+  RefineOptions refine;            // ZNCC window, visibility, virtual cameras (as the refinement)
+  std::string Check() const;
+};
+
+struct BiasEstimate {
+  int reference_view = -1;
+  std::vector<Eigen::Vector2d> bias_col_row_px;  // per view, added to its RPC's bias (full-res px)
+  std::vector<bool> solved;                      // false: no pair with a solved view (bias 0)
+  std::vector<double> zncc_before, zncc_after;   // per view: mean ZNCC with solved views, level 0
+};
+
+// Pairs as the refinement selects them (contrast, intersection angle, cap per image).
+std::vector<std::pair<int, int>> SelectRefinePairs(const RefineInput& input,
+                                                   const RefineOptions& options);
+
+// Throws Error{kInvalidArgument} if options.Check() fails or a pair index is out of
+// range, Error{kInvalidInput} for an empty initial mesh. input's RPCs may already carry
+// a bias; the estimate is added to it.
+BiasEstimate EstimateViewBiases(const RefineInput& input,
+                                const std::vector<std::pair<int, int>>& pairs,
+                                const BiasOptions& options = {});
+
+// input with each view's RPC bias increased by estimate.bias_col_row_px[v].
+void ApplyViewBiases(const BiasEstimate& estimate, RefineInput* input);
+
+}  // namespace satmesh

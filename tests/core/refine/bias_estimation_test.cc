@@ -1,0 +1,80 @@
+#include "core/refine/bias_estimation.h"
+
+#include <gtest/gtest.h>
+
+#include "core/common/error.h"
+#include "tests/core/refine/plane_scene.h"
+
+namespace satmesh {
+namespace {
+
+const std::vector<std::pair<int, int>> kAllPairs = {{0, 1}, {0, 2}, {1, 2}};
+
+// The textured plane seen by the default views; the initial surface is the true plane.
+RefineInput PlaneInput() {
+  const testing::Plane plane;
+  return testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                 testing::PlaneMesh(plane, 40, 1.0, 0.0));
+}
+
+TEST(BiasOptions, DefaultsAreValid) { EXPECT_EQ(BiasOptions().Check(), ""); }
+
+TEST(BiasOptions, InvalidValuesAreNamed) {
+  BiasOptions o;
+  o.search_radius_px = 0;
+  EXPECT_NE(o.Check().find("search_radius_px"), std::string::npos);
+  o = BiasOptions();
+  o.refine.zncc_window_radius = 0;
+  EXPECT_NE(o.Check().find("zncc_window_radius"), std::string::npos);
+}
+
+TEST(EstimateViewBiases, ZeroBiasStaysZero) {
+  const BiasEstimate e = EstimateViewBiases(PlaneInput(), kAllPairs);
+  EXPECT_EQ(e.reference_view, 0);  // every view is in two pairs: the first
+  for (int v = 0; v < 3; ++v) {
+    EXPECT_TRUE(e.solved[v]);
+    EXPECT_LT(e.bias_col_row_px[v].norm(), 0.03) << "view " << v << ": " << e.bias_col_row_px[v].transpose();
+  }
+}
+
+TEST(EstimateViewBiases, RecoversInjectedBias) {
+  RefineInput input = PlaneInput();
+  // The RPC of view 1 predicts pixels shifted by (2.7, -1.3): the correction is the opposite.
+  const Eigen::Vector2d injected(2.7, -1.3);
+  input.views[1].rpc = input.views[1].rpc.WithBias(injected);
+  const BiasEstimate e = EstimateViewBiases(input, kAllPairs);
+  EXPECT_NEAR(e.bias_col_row_px[1].x(), -injected.x(), 0.05);
+  EXPECT_NEAR(e.bias_col_row_px[1].y(), -injected.y(), 0.05);
+  EXPECT_LT(e.bias_col_row_px[2].norm(), 0.05) << e.bias_col_row_px[2].transpose();
+  EXPECT_GT(e.zncc_after[1], e.zncc_before[1] + 0.1);
+
+  ApplyViewBiases(e, &input);
+  EXPECT_NEAR(input.views[1].rpc.bias().x(), 0.0, 0.05);
+  EXPECT_NEAR(input.views[1].rpc.bias().y(), 0.0, 0.05);
+}
+
+TEST(EstimateViewBiases, ReferenceViewIsHeldFixed) {
+  RefineInput input = PlaneInput();
+  input.views[0].rpc = input.views[0].rpc.WithBias({0.4, 0.6});
+  BiasOptions options;
+  options.reference_view = 2;
+  const BiasEstimate e = EstimateViewBiases(input, {{0, 2}, {1, 2}}, options);
+  EXPECT_EQ(e.bias_col_row_px[2], Eigen::Vector2d::Zero());
+  EXPECT_NEAR(e.bias_col_row_px[0].x(), -0.4, 0.05);
+  EXPECT_NEAR(e.bias_col_row_px[0].y(), -0.6, 0.05);
+  EXPECT_LT(e.bias_col_row_px[1].norm(), 0.05);
+}
+
+TEST(EstimateViewBiases, UnpairedViewIsNotSolved) {
+  const BiasEstimate e = EstimateViewBiases(PlaneInput(), {{0, 1}});
+  EXPECT_TRUE(e.solved[1]);
+  EXPECT_FALSE(e.solved[2]);
+  EXPECT_EQ(e.bias_col_row_px[2], Eigen::Vector2d::Zero());
+}
+
+TEST(EstimateViewBiases, BadPairThrows) {
+  EXPECT_THROW(EstimateViewBiases(PlaneInput(), {{0, 3}}), Error);
+}
+
+}  // namespace
+}  // namespace satmesh
