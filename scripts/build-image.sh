@@ -6,7 +6,8 @@
 # Run as root.
 #
 #   scripts/build-image.sh [--tag localhost/satmesh:latest] [--base localhost/debian:12-slim]
-#                          [--jobs 2] [--mirror URL] [--rebuild-base]
+#                          [--jobs 2] [--git REV] [--mirror URL] [--rebuild-base]
+# --git REV builds the committed tree REV (git archive) instead of the working tree.
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 
@@ -15,14 +16,16 @@ base="localhost/debian:12-slim"  # local Debian 12 base image (FROM of both stag
 jobs=2                           # compile jobs inside the image build (ninja -j)
 mirror=""                        # Debian mirror for debootstrap; default: the host's
 rebuild_base=0                   # 1: remake the base image even if present
+git_rev=""                       # build context: "" = working tree, else this commit
 
-usage() { sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --tag) tag="$2"; shift 2 ;;
     --base) base="$2"; shift 2 ;;
     --jobs) jobs="$2"; shift 2 ;;
     --mirror) mirror="$2"; shift 2 ;;
+    --git) git_rev="$2"; shift 2 ;;
     --rebuild-base) rebuild_base=1; shift ;;
     -h|--help) usage ;;
     *) echo "build-image: unknown argument '$1'" >&2; usage ;;
@@ -72,7 +75,6 @@ make_base_image() {
   [ -n "$mirror" ] || { echo "build-image: no Debian mirror in /etc/apt (use --mirror URL)" >&2; exit 1; }
   local rootfs ctr mnt f
   rootfs="$(mktemp -d /tmp/satmesh-rootfs.XXXXXX)"
-  trap 'findmnt -rn -o TARGET | grep -q "^'"$rootfs"'" || rm -rf "'"$rootfs"'"' EXIT
   echo "build-image: debootstrap bookworm from $mirror into $rootfs"
   debootstrap --variant=minbase bookworm "$rootfs" "$mirror" >"$rootfs.log" 2>&1 \
     || { tail -20 "$rootfs.log" >&2; exit 1; }
@@ -93,6 +95,8 @@ make_base_image() {
   buildah config --env PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
     --cmd /bin/bash --label "org.opencontainers.image.source=debootstrap bookworm $mirror" "$ctr"
   buildah commit --rm -q "$ctr" "$base" >/dev/null
+  # debootstrap unmounts what it mounted; never delete through a mount left behind.
+  findmnt -rn -o TARGET | grep -q "^$rootfs" || rm -rf "$rootfs"
   echo "build-image: base image $base created"
 }
 
@@ -104,8 +108,16 @@ else
   echo "build-image: base image $base present"
 fi
 
-echo "build-image: building $tag (niced, -j$jobs)"
-cd "$here"
+context="$here"
+if [ -n "$git_rev" ]; then
+  context="$(mktemp -d /tmp/satmesh-context.XXXXXX)"
+  trap 'rm -rf "$context"' EXIT
+  git -C "$here" archive "$git_rev" | tar -x -C "$context"
+  # One fixed mtime: --layers then reuses the dependency layers across commits.
+  find "$context" -exec touch -h -d @946684800 {} +
+fi
+echo "build-image: building $tag from ${git_rev:-the working tree} (niced, -j$jobs)"
+cd "$context"
 nice -n 10 buildah bud --isolation chroot --layers --pull=never \
   --build-arg DEBIAN_IMAGE="$base" --build-arg BUILD_JOBS="$jobs" \
   -f docker/Dockerfile -t "$tag" .
