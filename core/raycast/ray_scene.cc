@@ -146,21 +146,25 @@ void RayScene::UpdateVertices(const std::vector<Eigen::Vector3f>& vertices) {
   rtcCommitScene(impl_->scene);  // refits (REFIT build quality), no rebuild
 }
 
-void RayScene::Intersect(const Ray* rays, RayHit* hits, size_t n) const {
-  const long long blocks = static_cast<long long>((n + kPacket - 1) / kPacket);
-  RTCScene scene = impl_->scene;
+namespace {
+
+// Closest hits of packets of 16 rays; ray_index(packet, lane) gives the ray of a lane
+// (or a value >= n for an empty lane). Parallel over packets.
+template <typename RayIndex>
+void IntersectPackets(RTCScene scene, const Ray* rays, RayHit* hits, size_t n,
+                      long long num_packets, RayIndex ray_index) {
 #pragma omp parallel for schedule(dynamic, 64)
-  for (long long b = 0; b < blocks; ++b) {
+  for (long long b = 0; b < num_packets; ++b) {
     alignas(64) int valid[kPacket];
+    size_t index[kPacket];
     RTCRayHit16 rh;
-    const size_t first = static_cast<size_t>(b) * kPacket;
     bool any = false;
     for (int k = 0; k < kPacket; ++k) {
-      const size_t i = first + k;
-      const bool ok = i < n && Traceable(rays[i]);
+      index[k] = ray_index(b, k);
+      const bool ok = index[k] < n && Traceable(rays[index[k]]);
       valid[k] = ok ? -1 : 0;
       any |= ok;
-      FillLane(rh.ray, k, ok ? rays[i] : kDummyRay);
+      FillLane(rh.ray, k, ok ? rays[index[k]] : kDummyRay);
       rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
       rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
@@ -168,10 +172,12 @@ void RayScene::Intersect(const Ray* rays, RayHit* hits, size_t n) const {
     if (any) {
       RTCIntersectContext context;
       rtcInitIntersectContext(&context);
+      context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
       rtcIntersect16(valid, scene, &context, &rh);
     }
-    for (int k = 0; k < kPacket && first + k < n; ++k) {
-      RayHit& h = hits[first + k];
+    for (int k = 0; k < kPacket; ++k) {
+      if (index[k] >= n) continue;
+      RayHit& h = hits[index[k]];
       h = RayHit{};
       if (valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {
         h.face = static_cast<int>(rh.hit.primID[k]);
@@ -181,6 +187,27 @@ void RayScene::Intersect(const Ray* rays, RayHit* hits, size_t n) const {
       }
     }
   }
+}
+
+}  // namespace
+
+void RayScene::Intersect(const Ray* rays, RayHit* hits, size_t n) const {
+  const long long packets = static_cast<long long>((n + kPacket - 1) / kPacket);
+  IntersectPackets(impl_->scene, rays, hits, n, packets, [](long long b, int k) {
+    return static_cast<size_t>(b) * kPacket + k;
+  });
+}
+
+void RayScene::IntersectImage(const Ray* rays, int width, int height, RayHit* hits) const {
+  // 4x4 pixel blocks: neighbouring rays traverse the same BVH nodes.
+  const int blocks_x = (width + 3) / 4, blocks_y = (height + 3) / 4;
+  const size_t n = size_t(width) * height;
+  IntersectPackets(impl_->scene, rays, hits, n, static_cast<long long>(blocks_x) * blocks_y,
+                   [&](long long b, int k) {
+                     const int col = int(b % blocks_x) * 4 + (k & 3);
+                     const int row = int(b / blocks_x) * 4 + (k >> 2);
+                     return (col < width && row < height) ? size_t(row) * width + col : n;
+                   });
 }
 
 RayHit RayScene::Intersect(const Ray& ray) const {

@@ -38,6 +38,8 @@ class RayScene {
   // origin/direction are not traced (reported as misses), never passed to Embree.
   void Intersect(const Ray* rays, RayHit* hits, size_t n) const;
   RayHit Intersect(const Ray& ray) const;
+  // The same for the rays of an image (row-major, width x height), traced in 4x4 blocks.
+  void IntersectImage(const Ray* rays, int width, int height, RayHit* hits) const;
   // Any-hit occlusion test for n rays: occluded[i] = 1 if something lies in (t_near, t_far).
   void Occluded(const Ray* rays, unsigned char* occluded, size_t n) const;
 

@@ -35,8 +35,45 @@ struct PairWorkspace {
   ZnccWorkspace zncc;
 };
 
-// Adds ∂M_ij/∂V into *vertex_gradient (if not null) and marks the vertices this
-// pair-direction touched in *touched (if not null). Hit maps of both views must be current.
+// The photometric gradient of many pair-directions, gathered per face (one thread's
+// share): pixels add g·(w0, w1, w2) to their face (g = ∂M/∂b · ∂b/∂n, w the barycentric
+// weights), and only AddTo() multiplies by the face normals and scatters to vertices.
+// This keeps the per-pixel work to three float adds into a face-ordered array.
+class GradientAccumulator {
+ public:
+  // Zeroes everything for a mesh of num_faces faces and num_vertices vertices.
+  void Reset(size_t num_faces, size_t num_vertices);
+  // Starts a new pair-direction (for counting the directions that see each vertex).
+  void BeginDirection() { ++direction_; }
+  void AddPixel(const Eigen::Vector3i& face_vertices, int face, float u, float v, float g) {
+    face_weights_[face] += Eigen::Vector3f(g * (1.f - u - v), g * u, g * v);
+    if (face_stamp_[face] == direction_) return;
+    face_stamp_[face] = direction_;
+    for (int k = 0; k < 3; ++k) {
+      const int vertex = face_vertices[k];
+      if (vertex_stamp_[vertex] != direction_) vertex_stamp_[vertex] = direction_, ++seen_[vertex];
+    }
+  }
+  // vertex_gradient[v] += Σ_faces weight · normal; seen[v] += directions that saw v.
+  void AddTo(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& face_normals,
+             std::vector<Eigen::Vector3d>* vertex_gradient, std::vector<int>* seen) const;
+
+ private:
+  std::vector<Eigen::Vector3f> face_weights_;
+  std::vector<int> face_stamp_, vertex_stamp_, seen_;
+  int direction_ = 0;
+};
+
+// One ordered pair (i -> j): returns the energy terms and, if accumulator is not null,
+// adds the pair-direction's gradient to it. Hit maps of both views must be current.
+PairEnergy AccumulatePairGradient(const ViewLevel& view_i, const ViewLevel& view_j,
+                                  const TriangleMesh& mesh,
+                                  const std::vector<Eigen::Vector3f>& face_normals,
+                                  const PhotometricOptions& options,
+                                  GradientAccumulator* accumulator, PairWorkspace* workspace);
+
+// The same for one pair-direction alone: adds ∂M_ij/∂V into *vertex_gradient (if not
+// null) and marks the vertices it touched in *touched (if not null).
 PairEnergy AccumulatePhotometricGradient(const ViewLevel& view_i, const ViewLevel& view_j,
                                          const TriangleMesh& mesh,
                                          const std::vector<Eigen::Vector3f>& face_normals,

@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -67,7 +68,8 @@ struct LevelContext {
 };
 
 // Mean ZNCC over all pair-directions; fills the gradient and per-vertex pair counts.
-// Pair-directions run in parallel (one per thread, own accumulators, summed at the end).
+// Pair-directions run in parallel (one per thread, gathered per face by each thread's
+// accumulator, scattered to the vertices once at the end).
 double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& slot,
                        const std::vector<std::pair<int, int>>& pairs, const TriangleMesh& mesh,
                        const PhotometricOptions& options, std::vector<Eigen::Vector3d>* gradient,
@@ -75,33 +77,26 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
   const auto normals = FaceNormals(mesh);
   std::vector<std::pair<int, int>> directions;
   for (const auto& [i, j] : pairs) directions.insert(directions.end(), {{i, j}, {j, i}});
-  const size_t nv = mesh.vertices.size();
+  const bool accumulate = gradient || seen;
   double sum = 0;
   long count = 0;
 #pragma omp parallel
   {
-    std::vector<Eigen::Vector3d> local_gradient(gradient ? nv : 0, Eigen::Vector3d::Zero());
-    std::vector<int> local_seen(seen ? nv : 0, 0);
-    std::vector<uint8_t> touched(seen ? nv : 0);
+    GradientAccumulator accumulator;
+    if (accumulate) accumulator.Reset(mesh.faces.size(), mesh.vertices.size());
     PairWorkspace workspace;
 #pragma omp for schedule(dynamic, 1) reduction(+ : sum, count)
     for (size_t d = 0; d < directions.size(); ++d) {
       const auto [a, b] = directions[d];
-      if (seen) std::fill(touched.begin(), touched.end(), 0);
-      const PairEnergy e = AccumulatePhotometricGradient(
-          views[slot[a]], views[slot[b]], mesh, normals, options,
-          gradient ? &local_gradient : nullptr, seen ? &touched : nullptr, &workspace);
+      const PairEnergy e =
+          AccumulatePairGradient(views[slot[a]], views[slot[b]], mesh, normals, options,
+                                 accumulate ? &accumulator : nullptr, &workspace);
       sum += e.sum_zncc;
       count += e.num_windows;
-      if (seen)
-        for (size_t v = 0; v < nv; ++v) local_seen[v] += touched[v];
     }
+    if (accumulate) {
 #pragma omp critical
-    {
-      if (gradient)
-        for (size_t v = 0; v < nv; ++v) (*gradient)[v] += local_gradient[v];
-      if (seen)
-        for (size_t v = 0; v < nv; ++v) (*seen)[v] += local_seen[v];
+      accumulator.AddTo(mesh, normals, gradient, seen);
     }
   }
   return count > 0 ? sum / count : 0.0;
@@ -172,7 +167,17 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
     ctx.progress.ThrowIfCancelled();
     const bool last = it == opt.iterations_per_level;
     auto t0 = Clock::now();
-    for (auto& v : views) CastHitMap(scene, &v);
+    if (it % opt.full_raycast_every == 0) {
+      for (auto& v : views) stats.times.intersect_s += CastHitMap(scene, &v);
+    } else {
+      for (auto& v : views) {
+        const HitMapUpdate u = UpdateHitMap(scene, *mesh, /*edge_tolerance=*/0.02f,
+                                            /*depth_jump_m=*/float(3 * gsd), &v);
+        stats.times.intersect_s += u.intersect_s;
+        stats.recast_fraction += double(u.recast) / std::max(1L, u.kept + u.recast);
+        ++stats.num_hit_map_updates;
+      }
+    }
     stats.times.raycast_s += Seconds(t0);
 
     t0 = Clock::now();
@@ -213,6 +218,10 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
   spdlog::info("level {}: {} vertices, {} faces, GSD {:.2f} m, mean ZNCC {:.4f} -> {:.4f} ({:.1f} s)",
                level, stats.num_vertices, stats.num_faces, gsd, stats.mean_zncc.front(),
                stats.mean_zncc.back(), stats.level_s);
+  if (stats.num_hit_map_updates > 0)
+    spdlog::info("level {}: hit maps followed their faces {} times, {:.1f}% of the hit pixels traced again",
+                 level, stats.num_hit_map_updates,
+                 100 * stats.recast_fraction / stats.num_hit_map_updates);
   return stats;
 }
 

@@ -29,6 +29,7 @@ struct RefineInput {
 
 struct StageTimes {
   double raycast_s = 0, gradient_s = 0, smoothness_s = 0, update_s = 0;
+  double intersect_s = 0;  // the part of raycast_s spent in Embree's Intersect alone
 };
 
 struct LevelStats {
@@ -39,6 +40,8 @@ struct LevelStats {
   std::vector<double> mean_zncc;       // before each iteration, and after the last
   StageTimes times;
   double level_s = 0;
+  double recast_fraction = 0;   // summed over hit-map updates: pixels traced again / hit
+  int num_hit_map_updates = 0;  // view hit maps updated without a full raycast
 };
 
 struct RefineResult {

@@ -28,11 +28,15 @@ struct RefineOptions {
   double min_ray_cos = 0.1;        // |cos| between ray and face normal below which a pixel is
                                    // ignored (grazing views), [0, 1)
   int virtual_camera_grid_px = 16; // spacing of exactly localised rays, in level pixels, >= 1
+  int full_raycast_every = 1;      // trace every ray every N iterations; in between, hit maps
+                                   // follow their faces (UpdateHitMap), [1, 100]; 1 = always
   double coarse_edge_px = 2.0;     // edge length of the coarse mesh at level L, in level px, > 0
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
   bool normalize_by_pair_count = true;  // divide each vertex's photometric gradient by the
                                         // number of pair-directions that saw it (OpenMVS)
   bool hold_boundary_xy = true;    // boundary vertices move vertically only (tile seams)
+  bool estimate_bias = false;      // per-view RPC bias shift estimated over the initial surface
+                                   // before refining (core/refine/bias_estimation.h)
   PairOptions pairs;
 
   std::string Check() const;

@@ -44,7 +44,21 @@ ViewLevel MakeViewLevel(int view, int level, ImageF image_level, const RpcModel&
                         const Eigen::Vector3d& box_max, int grid_px);
 
 // Casts all rays of the view against the scene (the paper's dominant cost: once per view
-// per iteration, shared by all pairs).
-void CastHitMap(const RayScene& scene, ViewLevel* view);
+// per iteration, shared by all pairs). Returns the seconds spent in Embree's Intersect.
+double CastHitMap(const RayScene& scene, ViewLevel* view);
+
+struct HitMapUpdate {
+  long kept = 0, recast = 0;  // pixels re-intersected with their own face / traced again
+  double intersect_s = 0;     // Embree time for the recast pixels
+};
+
+// Brings a hit map up to date after small vertex moves without tracing every ray: each
+// hit pixel re-intersects its ray with the moved plane of its own face, and is traced
+// again (Embree) when the new hit leaves the face (beyond `edge_tolerance` in
+// barycentric units) or when the pixel sits at a depth discontinuity of the old map
+// (|t - t_neighbour| > depth_jump_m: where occlusion can change). Misses stay misses.
+// Call CastHitMap every few iterations to bound what this approximation can miss.
+HitMapUpdate UpdateHitMap(const RayScene& scene, const TriangleMesh& mesh, float edge_tolerance,
+                          float depth_jump_m, ViewLevel* view);
 
 }  // namespace satmesh

@@ -6,107 +6,122 @@
 namespace satmesh {
 namespace {
 
-// In-place box sums of K interleaved channels (data[pixel * K + k]) over the (2r+1)²
-// window around each pixel, truncated at the borders. One pass per direction for all
-// channels keeps the memory traffic down (this is the ZNCC's hot loop).
-template <int K>
-void BoxSumInterleaved(std::vector<double>& data, int width, int height, int r,
-                       std::vector<double>& rows) {
-  rows.resize(data.size());
-  for (int y = 0; y < height; ++y) {
-    const double* src = &data[size_t(y) * width * K];
-    double* dst = &rows[size_t(y) * width * K];
-    double acc[K] = {};
-    for (int x = 0; x <= r && x < width; ++x)
-      for (int k = 0; k < K; ++k) acc[k] += src[x * K + k];
-    for (int x = 0; x < width; ++x) {
-      for (int k = 0; k < K; ++k) dst[x * K + k] = acc[k];
-      if (x + r + 1 < width)
-        for (int k = 0; k < K; ++k) acc[k] += src[(x + r + 1) * K + k];
-      if (x - r >= 0)
-        for (int k = 0; k < K; ++k) acc[k] -= src[(x - r) * K + k];
-    }
+constexpr int kProducts = 6;      // 1, a, b, a², b², ab
+constexpr int kCoefficients = 4;  // A, B, C, D of the derivative (DESIGN.md)
+
+// Horizontal (2r+1)-box sums of `channels` padded rows (stride width+2r, zeros in the
+// pads, so truncation at the borders is implicit) into `out` (stride width).
+void BoxSumRows(const double* padded, int channels, int width, int r, double* out) {
+  const size_t stride = size_t(width) + 2 * r;
+  for (int c = 0; c < channels; ++c) {
+    const double* in = padded + c * stride;
+    double* o = out + size_t(c) * width;
+    for (int x = 0; x < width; ++x) o[x] = in[x];
+    for (int d = 1; d <= 2 * r; ++d)
+      for (int x = 0; x < width; ++x) o[x] += in[x + d];
   }
-  const size_t row_len = size_t(width) * K;
-  std::vector<double> acc(row_len, 0.0);
-  for (int y = 0; y <= r && y < height; ++y) {
-    const double* src = &rows[y * row_len];
-    for (size_t i = 0; i < row_len; ++i) acc[i] += src[i];
-  }
-  for (int y = 0; y < height; ++y) {
-    std::copy(acc.begin(), acc.end(), data.begin() + y * row_len);
-    if (y + r + 1 < height) {
-      const double* add = &rows[(y + r + 1) * row_len];
-      for (size_t i = 0; i < row_len; ++i) acc[i] += add[i];
-    }
-    if (y - r >= 0) {
-      const double* sub = &rows[(y - r) * row_len];
-      for (size_t i = 0; i < row_len; ++i) acc[i] -= sub[i];
-    }
+}
+
+// Vertical sum of the ring's 2r+1 rows (each `channels` x width) into `out`.
+void SumRing(const double* ring, int slots, int channels, int width, double* out) {
+  const size_t row = size_t(channels) * width;
+  std::copy(ring, ring + row, out);
+  for (int k = 1; k < slots; ++k) {
+    const double* in = ring + k * row;
+    for (size_t i = 0; i < row; ++i) out[i] += in[i];
   }
 }
 
 }  // namespace
 
+// Streams over rows with two rings of 2r+1 horizontally box-summed rows: products
+// (window statistics of row y need rows y-r..y+r) and derivative coefficients (∂M/∂b of
+// row y needs the coefficients of rows y-r..y+r). Rows outside the image are zero.
 ZnccField ComputeZnccField(const std::vector<float>& a, const std::vector<float>& b,
                            const std::vector<uint8_t>& valid, int width, int height,
                            const ZnccOptions& options, ZnccWorkspace* workspace) {
   ZnccWorkspace local;
   ZnccWorkspace& ws = workspace ? *workspace : local;
-  const size_t n = size_t(width) * height;
-  const int r = options.window_radius;
-  const double min_count = options.min_valid_fraction * (2 * r + 1) * (2 * r + 1);
+  const int w = width, h = height, r = options.window_radius, slots = 2 * r + 1;
+  const double min_count = options.min_valid_fraction * slots * slots;
   const double eps = options.variance_floor;
-
-  // Window sums of 1, a, b, a², b², ab over valid pixels.
-  std::vector<double>& sums = ws.buffers[0];
-  sums.resize(6 * n);
-  for (size_t i = 0; i < n; ++i) {
-    double* s = &sums[6 * i];
-    if (!valid[i]) {
-      std::fill(s, s + 6, 0.0);
-      continue;
-    }
-    const double ai = a[i], bi = b[i];
-    s[0] = 1, s[1] = ai, s[2] = bi, s[3] = ai * ai, s[4] = bi * bi, s[5] = ai * bi;
-  }
-  BoxSumInterleaved<6>(sums, width, height, r, ws.rows);
+  const size_t stride = size_t(w) + 2 * r;
 
   ZnccField field;
-  field.zncc.assign(n, 0.f);
-  field.dM_db.assign(n, 0.f);
-  // Per-window coefficients of the derivative (A..D in DESIGN.md), summed over windows.
-  std::vector<double>& coeffs = ws.buffers[1];
-  coeffs.resize(4 * n);
-  for (size_t i = 0; i < n; ++i) {
-    double* c = &coeffs[4 * i];
-    const double* s = &sums[6 * i];
-    const double count = s[0];
-    if (!valid[i] || count < min_count) {
-      std::fill(c, c + 4, 0.0);
-      continue;
+  field.dM_db.assign(size_t(w) * h, 0.f);
+  ws.product_rows.assign(size_t(slots) * kProducts * w, 0.0);
+  ws.coefficient_rows.assign(size_t(slots) * kCoefficients * w, 0.0);
+  ws.scratch.assign(kProducts * stride + kProducts * size_t(w), 0.0);
+  double* padded = ws.scratch.data();                // kProducts padded rows
+  double* sums = padded + kProducts * stride;        // kProducts rows of window sums
+  double sum_zncc = 0;
+  long num_windows = 0;
+
+  for (int t = 0; t < h + 2 * r; ++t) {
+    // Stage 1: products of row t, box-summed horizontally, into the product ring.
+    if (t < h) {
+      const size_t row = size_t(t) * w;
+      for (int x = 0; x < w; ++x) {
+        const bool ok = valid[row + x];
+        const double ai = ok ? a[row + x] : 0.0, bi = ok ? b[row + x] : 0.0;
+        double* p = padded + r + x;
+        p[0] = ok ? 1.0 : 0.0;
+        p[stride] = ai;
+        p[2 * stride] = bi;
+        p[3 * stride] = ai * ai;
+        p[4 * stride] = bi * bi;
+        p[5 * stride] = ai * bi;
+      }
+      BoxSumRows(padded, kProducts, w, r, &ws.product_rows[size_t(t % slots) * kProducts * w]);
+    } else {
+      std::fill_n(&ws.product_rows[size_t(t % slots) * kProducts * w], kProducts * w, 0.0);
     }
-    const double mu_a = s[1] / count, mu_b = s[2] / count;
-    const double var_a = std::max(0.0, s[3] / count - mu_a * mu_a) + eps;
-    const double var_b = std::max(0.0, s[4] / count - mu_b * mu_b) + eps;
-    const double cov = s[5] / count - mu_a * mu_b;
-    const double sigma_ab = std::sqrt(var_a * var_b);
-    const double zncc = cov / sigma_ab;
-    field.zncc[i] = float(zncc);
-    field.sum_zncc += zncc;
-    ++field.num_windows;
-    c[0] = 1.0 / (count * sigma_ab);  // A
-    c[1] = mu_a * c[0];               // B
-    c[2] = zncc / (count * var_b);    // C
-    c[3] = mu_b * c[2];               // D
+    // Stage 2: window statistics of row y = t - r, coefficients into the coefficient ring.
+    const int y = t - r;
+    double* coeff_slot = nullptr;
+    if (y >= 0) coeff_slot = &ws.coefficient_rows[size_t(y % slots) * kCoefficients * w];
+    if (y >= 0 && y < h) {
+      SumRing(ws.product_rows.data(), slots, kProducts, w, sums);
+      const size_t row = size_t(y) * w;
+      double* c = padded;  // reuse: kCoefficients padded rows
+      for (int x = 0; x < w; ++x) {
+        const double count = sums[x];
+        const bool ok = valid[row + x] && count >= min_count;
+        const double n = std::max(count, 1.0);
+        const double mu_a = sums[w + x] / n, mu_b = sums[2 * w + x] / n;
+        const double var_a = std::max(0.0, sums[3 * w + x] / n - mu_a * mu_a) + eps;
+        const double var_b = std::max(0.0, sums[4 * w + x] / n - mu_b * mu_b) + eps;
+        const double cov = sums[5 * w + x] / n - mu_a * mu_b;
+        const double sigma_ab = std::sqrt(var_a * var_b);
+        const double zncc = cov / sigma_ab;
+        sum_zncc += ok ? zncc : 0.0;
+        num_windows += ok;
+        const double A = ok ? 1.0 / (n * sigma_ab) : 0.0;
+        const double C = ok ? zncc / (n * var_b) : 0.0;
+        c[r + x] = A;
+        c[stride + r + x] = mu_a * A;
+        c[2 * stride + r + x] = C;
+        c[3 * stride + r + x] = mu_b * C;
+      }
+      BoxSumRows(padded, kCoefficients, w, r, coeff_slot);
+    } else if (y >= h) {
+      std::fill_n(coeff_slot, kCoefficients * w, 0.0);
+    }
+    // Stage 3: ∂M/∂b of row y2 = t - 2r.
+    const int y2 = t - 2 * r;
+    if (y2 >= 0) {
+      SumRing(ws.coefficient_rows.data(), slots, kCoefficients, w, sums);
+      const size_t row = size_t(y2) * w;
+      for (int x = 0; x < w; ++x) {
+        if (!valid[row + x]) continue;
+        const double dzncc_db =
+            a[row + x] * sums[x] - sums[w + x] - b[row + x] * sums[2 * w + x] + sums[3 * w + x];
+        field.dM_db[row + x] = float(-dzncc_db);
+      }
+    }
   }
-  BoxSumInterleaved<4>(coeffs, width, height, r, ws.rows);
-  for (size_t i = 0; i < n; ++i) {
-    if (!valid[i]) continue;
-    const double* c = &coeffs[4 * i];
-    const double dzncc_db = a[i] * c[0] - c[1] - b[i] * c[2] + c[3];
-    field.dM_db[i] = float(-dzncc_db);
-  }
+  field.sum_zncc = sum_zncc;
+  field.num_windows = num_windows;
   return field;
 }
 

@@ -17,17 +17,18 @@ struct ZnccOptions {
 
 struct ZnccField {
   std::vector<float> dM_db;   // ∂M/∂b per pixel (0 where invalid)
-  std::vector<float> zncc;    // ZNCC of the window centred at each pixel (0 where none)
   double sum_zncc = 0;        // Σ ZNCC over the counted windows (M = -sum_zncc)
   long num_windows = 0;
 };
 
-// Scratch buffers, reused across calls to avoid reallocating per pair.
+// Scratch rows, reused across calls (the computation streams over rows: its working set
+// is 2 x (2r+1) rows of window sums, so it stays in cache for any image size).
 struct ZnccWorkspace {
-  std::vector<double> buffers[2], rows;
+  std::vector<double> product_rows, coefficient_rows, scratch;
 };
 
 // a, b: reference and warped images (width*height, row-major); valid: 1 where both exist.
+// Only pixels where valid is 1 are read from a and b.
 ZnccField ComputeZnccField(const std::vector<float>& a, const std::vector<float>& b,
                            const std::vector<uint8_t>& valid, int width, int height,
                            const ZnccOptions& options, ZnccWorkspace* workspace = nullptr);
