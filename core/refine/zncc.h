@@ -24,7 +24,7 @@ struct ZnccField {
 // Scratch rows, reused across calls (the computation streams over rows: its working set
 // is 2 x (2r+1) rows of window sums, so it stays in cache for any image size).
 struct ZnccWorkspace {
-  std::vector<double> product_rows, coefficient_rows, scratch;
+  std::vector<float> product_rows, coefficient_rows, scratch;
 };
 
 // a, b: reference and warped images (width*height, row-major); valid: 1 where both exist.
