@@ -41,6 +41,10 @@ int RunSynth(const std::vector<std::string>& argv) {
     std::printf("  %s %dx%d off-nadir %.1f az %.1f gsd %.3f m  rpc fit max %.5f px  ray %.5f px\n",
                 v.image.c_str(), v.width, v.height, v.off_nadir_deg, v.azimuth_deg, v.gsd_m,
                 v.rpc_fit_max_half_step_px, v.ray_grid_error_px);
+  std::printf("pairs: %zu selected by the refinement's rule (window %g-%g deg, cap %d per image), "
+              "%d view pairs inside the window\n",
+              r.pairs.size(), options.min_pair_angle_deg, options.max_pair_angle_deg,
+              options.max_pairs_per_image, r.candidate_pairs);
   std::printf("initial DSM on roofs (%zu cells): NMAD %.3f m, p68 %.3f m, holes %.1f%%\n",
               r.num_roof_cells, r.initial_roof_nmad_m, r.initial_roof_p68_m,
               100 * r.initial_hole_fraction);

@@ -1,5 +1,7 @@
 #include "core/synth/render.h"
 
+#include <embree3/rtcore.h>
+
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -11,6 +13,56 @@
 namespace satmesh::synth {
 namespace {
 constexpr double kDeg = M_PI / 180.0;
+constexpr int kLanes = 16;
+
+// 16 rays for rtcIntersect16/rtcOccluded16. Lanes not Set stay inactive with finite,
+// harmless values (Embree is built with ray masks: mask must be non-zero; it aborts on NaN).
+struct Packet {
+  alignas(64) int valid[kLanes] = {};
+  RTCRayHit16 rh;
+  bool any = false;
+
+  Packet() {
+    for (int k = 0; k < kLanes; ++k) {
+      auto& r = rh.ray;
+      r.org_x[k] = r.org_y[k] = r.org_z[k] = 0.f;
+      r.dir_x[k] = r.dir_y[k] = 0.f;
+      r.dir_z[k] = 1.f;
+      r.tnear[k] = 0.f;
+      r.tfar[k] = 0.f;
+      r.time[k] = 0.f;
+      r.mask[k] = 0xFFFFFFFFu;
+      r.id[k] = unsigned(k);
+      r.flags[k] = 0;
+      rh.hit.geomID[k] = rh.hit.primID[k] = rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+  }
+  void Set(int k, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t_near, float t_far) {
+    if (!o.allFinite() || !d.allFinite() || !(d.squaredNorm() > 0.f)) return;
+    auto& r = rh.ray;
+    r.org_x[k] = o.x(), r.org_y[k] = o.y(), r.org_z[k] = o.z();
+    r.dir_x[k] = d.x(), r.dir_y[k] = d.y(), r.dir_z[k] = d.z();
+    r.tnear[k] = t_near, r.tfar[k] = t_far;
+    valid[k] = -1;
+    any = true;
+  }
+  void Intersect(RTCScene scene) {
+    if (!any) return;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcIntersect16(valid, scene, &context, &rh);
+  }
+  void Occluded(RTCScene scene) {  // tfar becomes -inf on occluded lanes
+    if (!any) return;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcOccluded16(valid, scene, &context, &rh.ray);
+  }
+  bool Hit(int k) const { return valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID; }
+  bool Blocked(int k) const { return valid[k] && !(rh.ray.tfar[k] >= 0.f); }
+};
 }  // namespace
 
 Eigen::Vector3f SunLight::DirectionToSun() const {
@@ -89,14 +141,71 @@ double RayGridErrorPx(const PushbroomCamera& camera, const ViewRayGrid& rays,
   return worst;
 }
 
-RenderScene::RenderScene(const CityModel& city)
-    : city_(city), ray_scene_(std::make_unique<RayScene>(city.mesh)) {
-  normals_.reserve(city.mesh.faces.size());
-  for (const auto& f : city.mesh.faces) {
-    const auto &a = city.mesh.vertices[f[0]], &b = city.mesh.vertices[f[1]],
-               &c = city.mesh.vertices[f[2]];
+struct RenderScene::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+RenderScene::RenderScene(const CityModel& city) : city_(city), impl_(std::make_unique<Impl>()) {
+  const TriangleMesh& mesh = city.mesh;
+  normals_.reserve(mesh.faces.size());
+  for (const auto& f : mesh.faces) {
+    const auto &a = mesh.vertices[f[0]], &b = mesh.vertices[f[1]], &c = mesh.vertices[f[2]];
     const Eigen::Vector3f n = (b - a).cross(c - a);
     normals_.push_back(n.norm() > 0 ? n.normalized() : Eigen::Vector3f(0, 0, 1));
+  }
+  for (const auto& v : mesh.vertices)
+    SATMESH_CHECK(v.allFinite(), ErrorCode::kInvalidInput, "RenderScene: non-finite vertex");
+  impl_->device = rtcNewDevice(nullptr);
+  SATMESH_CHECK(impl_->device != nullptr, ErrorCode::kInternal, "RenderScene: rtcNewDevice failed");
+  impl_->scene = rtcNewScene(impl_->device);
+  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);  // static: built once, traced a lot
+  if (!mesh.faces.empty()) {
+    RTCGeometry g = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertices.size()));
+    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.faces.size()));
+    SATMESH_CHECK(vb && ib, ErrorCode::kInternal, "RenderScene: Embree could not allocate buffers");
+    const long long nv = (long long)mesh.vertices.size();
+    for (size_t i = 0; i < mesh.vertices.size(); ++i)
+      for (int k = 0; k < 3; ++k) vb[3 * i + k] = mesh.vertices[i][k];
+    for (size_t f = 0; f < mesh.faces.size(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        SATMESH_CHECK(mesh.faces[f][k] >= 0 && mesh.faces[f][k] < nv, ErrorCode::kInvalidInput,
+                      "RenderScene: face " + std::to_string(f) + " has a vertex out of range");
+        ib[3 * f + k] = unsigned(mesh.faces[f][k]);
+      }
+    rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_HIGH);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(impl_->scene, g);
+    rtcReleaseGeometry(g);  // the scene holds it
+  }
+  rtcCommitScene(impl_->scene);
+}
+
+RenderScene::~RenderScene() = default;
+
+void RenderScene::Intersect(const Ray* rays, RayHit* hits, size_t n) const {
+  const long long packets = (long long)((n + kLanes - 1) / kLanes);
+#pragma omp parallel for schedule(dynamic, 64)
+  for (long long p = 0; p < packets; ++p) {
+    Packet pk;
+    for (int k = 0; k < kLanes; ++k) {
+      const size_t i = size_t(p) * kLanes + k;
+      if (i < n) pk.Set(k, rays[i].origin, rays[i].direction, rays[i].t_near, rays[i].t_far);
+    }
+    pk.Intersect(impl_->scene);
+    for (int k = 0; k < kLanes; ++k) {
+      const size_t i = size_t(p) * kLanes + k;
+      if (i >= n) continue;
+      hits[i] = RayHit{};
+      if (pk.Hit(k)) hits[i] = {int(pk.rh.hit.primID[k]), pk.rh.ray.tfar[k], pk.rh.hit.u[k], pk.rh.hit.v[k]};
+    }
   }
 }
 
@@ -107,6 +216,9 @@ std::string RenderOptions::Check() const {
   return "";
 }
 
+// Pixels are traced in 4x4 blocks: one packet of 16 primary rays per subsample (coherent:
+// neighbouring pixels), then one packet of shadow rays for the lanes whose surface faces
+// the sun, then shading; everything on the stack, no allocation per pixel.
 ImageF RenderView(const RenderScene& scene, const ViewRayGrid& rays, int width, int height,
                   const SunLight& sun, const RenderOptions& options, const Progress* progress) {
   const std::string why = options.Check();
@@ -114,73 +226,60 @@ ImageF RenderView(const RenderScene& scene, const ViewRayGrid& rays, int width, 
   const int s = options.supersample;
   const Eigen::Vector3f to_sun = sun.DirectionToSun();
   const CityModel& city = scene.city();
+  const auto& normals = scene.face_normals();
+  const RTCScene rtc = scene.impl().scene;
   ImageF out(width, height, 0.f);
-  const size_t per_row = size_t(width) * s * s;
-  std::vector<Ray> primary, shadow;
-  std::vector<RayHit> hits;
-  std::vector<unsigned char> occluded;
-  std::vector<size_t> shadow_index;
-  for (int r0 = 0; r0 < height; r0 += options.row_block) {
+  const int band = std::max(4, options.row_block / 4 * 4);
+  const int blocks_x = (width + 3) / 4;
+  for (int r0 = 0; r0 < height; r0 += band) {
     if (progress) progress->ThrowIfCancelled();
-    const int r1 = std::min(height, r0 + options.row_block);
-    const size_t n = per_row * (r1 - r0);
-    primary.resize(n);
-    hits.resize(n);
-    occluded.assign(n, 0);
-#pragma omp parallel for schedule(dynamic, 1)
-    for (int row = r0; row < r1; ++row)
-      for (int col = 0; col < width; ++col)
-        for (int b = 0; b < s; ++b)
-          for (int a = 0; a < s; ++a) {
-            Eigen::Vector3d low, high;
-            rays.Line(col + (a + 0.5) / s, row + (b + 0.5) / s, &low, &high);
-            Ray& ray = primary[(size_t(row - r0) * width + col) * s * s + b * s + a];
-            ray.origin = high.cast<float>();
-            ray.direction = (low - high).cast<float>();
-            ray.t_near = 0.f;
-            ray.t_far = 1e30f;
-          }
-    scene.rays().Intersect(primary.data(), hits.data(), n);
-    // Shadow rays only where the sun can light the surface (compacted list).
-    shadow.clear();
-    shadow_index.clear();
-    for (size_t k = 0; k < n; ++k) {
-      if (!hits[k].hit()) continue;
-      Eigen::Vector3f nrm = scene.face_normals()[hits[k].face];
-      if (nrm.dot(primary[k].direction) > 0) nrm = -nrm;
-      if (nrm.dot(to_sun) <= 0) continue;
-      Ray sr;
-      sr.origin = primary[k].origin + hits[k].t * primary[k].direction + 0.01f * nrm;
-      sr.direction = to_sun;
-      sr.t_near = 0.f;
-      sr.t_far = 1e4f;
-      shadow.push_back(sr);
-      shadow_index.push_back(k);
-    }
-    std::vector<unsigned char> shadow_hit(shadow.size(), 0);
-    scene.rays().Occluded(shadow.data(), shadow_hit.data(), shadow.size());
-    for (size_t q = 0; q < shadow.size(); ++q) occluded[shadow_index[q]] = shadow_hit[q];
-#pragma omp parallel for
-    for (int row = r0; row < r1; ++row)
-      for (int col = 0; col < width; ++col) {
-        double sum = 0;
-        for (int q = 0; q < s * s; ++q) {
-          const size_t k = (size_t(row - r0) * width + col) * s * s + q;
-          if (!hits[k].hit()) {
-            sum += 0.1;
+    const int r1 = std::min(height, r0 + band);
+    const int blocks = blocks_x * ((r1 - r0 + 3) / 4);
+#pragma omp parallel for schedule(dynamic, 4)
+    for (int b = 0; b < blocks; ++b) {
+      const int c0 = (b % blocks_x) * 4, row0 = r0 + (b / blocks_x) * 4;
+      float sum[kLanes] = {};
+      for (int q = 0; q < s * s; ++q) {
+        const double dx = (q % s + 0.5) / s, dy = (q / s + 0.5) / s;
+        Packet primary;
+        for (int k = 0; k < kLanes; ++k) {
+          const int col = c0 + (k & 3), row = row0 + (k >> 2);
+          if (col >= width || row >= r1) continue;
+          Eigen::Vector3d low, high;
+          rays.Line(col + dx, row + dy, &low, &high);
+          primary.Set(k, high.cast<float>(), (low - high).cast<float>(), 0.f, 1e30f);
+        }
+        primary.Intersect(rtc);
+        Packet shadow;
+        Eigen::Vector3f point[kLanes], normal[kLanes];
+        for (int k = 0; k < kLanes; ++k) {
+          if (!primary.Hit(k)) continue;
+          const auto& r = primary.rh.ray;
+          const Eigen::Vector3f dir(r.dir_x[k], r.dir_y[k], r.dir_z[k]);
+          point[k] = Eigen::Vector3f(r.org_x[k], r.org_y[k], r.org_z[k]) + r.tfar[k] * dir;
+          normal[k] = normals[primary.rh.hit.primID[k]];
+          if (normal[k].dot(dir) > 0) normal[k] = -normal[k];
+          if (normal[k].dot(to_sun) > 0) shadow.Set(k, point[k] + 0.01f * normal[k], to_sun, 0.f, 1e4f);
+        }
+        shadow.Occluded(rtc);
+        for (int k = 0; k < kLanes; ++k) {
+          if (!primary.valid[k]) continue;
+          if (!primary.Hit(k)) {
+            sum[k] += 0.1f;
             continue;
           }
-          const int f = hits[k].face;
-          const Eigen::Vector3f p = primary[k].origin + hits[k].t * primary[k].direction;
-          Eigen::Vector3f nrm = scene.face_normals()[f];
-          if (nrm.dot(primary[k].direction) > 0) nrm = -nrm;
-          const float albedo = Albedo(city.face_material[f], city.face_variant[f], p, nrm, city.texture);
-          const float direct = occluded[k] ? 0.f : std::max(0.f, nrm.dot(to_sun));
-          const float sky = options.sky_irradiance * (0.55f + 0.45f * nrm.z());
-          sum += albedo * (options.sun_irradiance * direct + sky);
+          const unsigned f = primary.rh.hit.primID[k];
+          const float albedo = Albedo(city.face_material[f], city.face_variant[f], point[k], normal[k], city.texture);
+          const float direct = shadow.valid[k] && !shadow.Blocked(k) ? normal[k].dot(to_sun) : 0.f;
+          const float sky = options.sky_irradiance * (0.55f + 0.45f * normal[k].z());
+          sum[k] += albedo * (options.sun_irradiance * direct + sky);
         }
-        out.at(col, row) = float(sum / (s * s));
       }
+      for (int k = 0; k < kLanes; ++k) {
+        const int col = c0 + (k & 3), row = row0 + (k >> 2);
+        if (col < width && row < r1) out.at(col, row) = sum[k] / float(s * s);
+      }
+    }
     if (progress) progress->Report(double(r1) / height, "render");
   }
   return out;

@@ -52,17 +52,25 @@ double RayGridErrorPx(const PushbroomCamera& camera, const ViewRayGrid& rays,
                       const std::string& scene_crs, const Eigen::Vector3d& origin,
                       const std::vector<double>& heights_m, int samples = 9);
 
-// A CityModel (or any mesh with per-face materials) prepared for ray casting.
+// A CityModel (or any mesh with per-face materials) prepared for ray casting: a static,
+// high-quality Embree BVH (built once, shared by all views), and the face normals.
 class RenderScene {
  public:
   explicit RenderScene(const CityModel& city);  // keeps a reference to city
+  ~RenderScene();
+  RenderScene(const RenderScene&) = delete;
+  RenderScene& operator=(const RenderScene&) = delete;
   const CityModel& city() const { return city_; }
-  const RayScene& rays() const { return *ray_scene_; }
   const std::vector<Eigen::Vector3f>& face_normals() const { return normals_; }
+  // Closest hits of n rays (parallel, packets of 16). Non-finite rays miss.
+  void Intersect(const Ray* rays, RayHit* hits, size_t n) const;
+
+  struct Impl;  // Embree device and scene (render.cc)
+  const Impl& impl() const { return *impl_; }
 
  private:
   const CityModel& city_;
-  std::unique_ptr<RayScene> ray_scene_;
+  std::unique_ptr<Impl> impl_;
   std::vector<Eigen::Vector3f> normals_;
 };
 
@@ -70,7 +78,7 @@ struct RenderOptions {
   int supersample = 2;          // samples per pixel per axis (box filter), [1, 8]
   float sun_irradiance = 1.0f;  // direct sun on a surface facing it, > 0
   float sky_irradiance = 0.3f;  // diffuse sky on an upward surface, >= 0
-  int row_block = 32;           // rows traced per batch, >= 1
+  int row_block = 32;           // rows per band (progress and cancellation), >= 1
   std::string Check() const;
 };
 

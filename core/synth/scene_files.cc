@@ -25,6 +25,8 @@ GDALDatasetH CreateTif(const std::string& path, int w, int h, GDALDataType type)
   char** opts = nullptr;
   opts = CSLSetNameValue(opts, "COMPRESS", "DEFLATE");
   opts = CSLSetNameValue(opts, "TILED", "YES");
+  opts = CSLSetNameValue(opts, "PREDICTOR", "2");            // integer types only here
+  opts = CSLSetNameValue(opts, "NUM_THREADS", "ALL_CPUS");   // compress tiles in parallel
   GDALDatasetH ds = GDALCreate(driver, path.c_str(), w, h, 1, type, opts);
   CSLDestroy(opts);
   SATMESH_CHECK(ds != nullptr, ErrorCode::kIo, "cannot create " + path);

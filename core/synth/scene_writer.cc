@@ -16,23 +16,6 @@
 
 namespace satmesh::synth {
 namespace {
-constexpr double kDeg = M_PI / 180.0;
-constexpr double kEarthR = 6371e3, kAltitude = 600e3;
-
-Eigen::Vector3d ViewVector(const Eigen::Vector2d& off_nadir_azimuth) {
-  const double zen = std::asin(std::min(1.0, (kEarthR + kAltitude) / kEarthR *
-                                                 std::sin(off_nadir_azimuth.x() * kDeg)));
-  const double az = off_nadir_azimuth.y() * kDeg;
-  return {std::sin(zen) * std::sin(az), std::sin(zen) * std::cos(az), std::cos(zen)};
-}
-
-Eigen::Vector2d OffNadirAzimuth(const Eigen::Vector3d& v) {
-  const double zen = std::acos(std::clamp(v.z(), -1.0, 1.0));
-  double az = std::atan2(v.x(), v.y()) / kDeg;
-  if (az < 0) az += 360;
-  return {std::asin(kEarthR / (kEarthR + kAltitude) * std::sin(zen)) / kDeg, az};
-}
-
 class Stopwatch {
  public:
   double Lap() {
@@ -56,6 +39,10 @@ std::string SynthOptions::Check() const {
   if (!(min_pair_angle_deg > 0 && min_pair_angle_deg < max_pair_angle_deg))
     return "need 0 < min_pair_angle_deg < max_pair_angle_deg";
   if (min_partners < 1) return "min_partners must be >= 1";
+  if (!(azimuth_spread_deg > 0 && azimuth_spread_deg <= 360)) return "azimuth_spread_deg must be in (0, 360]";
+  if (max_pairs_per_image < 1) return "max_pairs_per_image must be >= 1";
+  if (target_pairs < 0) return "target_pairs must be >= 0";
+  if (!(off_nadir_stratum_width >= 0)) return "off_nadir_stratum_width must be >= 0";
   if (margin_px < 0) return "margin_px must be >= 0";
   if (!(gain_spread >= 0 && gain_spread <= 0.9)) return "gain_spread must be in [0, 0.9]";
   if (!(rpc_bias_sigma_px >= 0)) return "rpc_bias_sigma_px must be >= 0";
@@ -78,14 +65,19 @@ SynthOptions SynthPreset(const std::string& name, uint32_t seed) {
     o.city.street_pitch_m = 56;
     o.num_views = 4;
     o.min_partners = 2;
+    o.azimuth_spread_deg = 90;  // 4 views over 360 deg pair only near nadir
+    o.off_nadir_stratum_width = 3;
   } else if (name == "default") {
     o.city.aoi_size_m = 300;
     o.num_views = 10;
+    o.azimuth_spread_deg = 180;  // 10 views: half circle (full circle: no partners off nadir)
   } else if (name == "large") {
     o.city.aoi_size_m = 750;
     o.city.street_pitch_m = 90;
-    o.num_views = 26;
-    o.min_partners = 3;
+    o.num_views = 26;  // JAX-like: azimuths around the circle, off-nadir 5-35 deg
+    o.min_partners = 2;
+    o.target_pairs = 45;
+    o.off_nadir_stratum_width = 3;
   } else {
     ThrowError(ErrorCode::kInvalidArgument,
                "unknown preset '" + name + "' (expected small, default or large)");
@@ -93,47 +85,17 @@ SynthOptions SynthPreset(const std::string& name, uint32_t seed) {
   return o;
 }
 
-double ViewIntersectionAngleDeg(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  return std::acos(std::clamp(ViewVector(a).dot(ViewVector(b)), -1.0, 1.0)) / kDeg;
-}
-
-std::vector<Eigen::Vector2d> PlanViews(const SynthOptions& o, uint64_t seed) {
-  std::mt19937_64 gen(seed * 0x9E3779B97F4A7C15ull + 5);
-  std::uniform_real_distribution<double> u(0, 1);
-  const int need = std::min(o.min_partners, o.num_views - 1);
-  const double lo = o.min_pair_angle_deg, hi = o.max_pair_angle_deg;
-  std::vector<Eigen::Vector2d> best;
-  for (int attempt = 0; attempt < 2000; ++attempt) {
-    std::vector<Eigen::Vector3d> dirs;
-    const double first_on = o.min_off_nadir_deg + (0.3 + 0.4 * u(gen)) * (o.max_off_nadir_deg - o.min_off_nadir_deg);
-    dirs.push_back(ViewVector({first_on, 360 * u(gen)}));
-    for (int tries = 0; int(dirs.size()) < o.num_views && tries < 5000; ++tries) {
-      const Eigen::Vector3d& from = dirs[size_t(u(gen) * dirs.size())];
-      const Eigen::Vector3d w =
-          Eigen::Vector3d(u(gen) - 0.5, u(gen) - 0.5, u(gen) - 0.5).cross(from).normalized();
-      const double delta = (lo + 1 + (hi - lo - 2) * u(gen)) * kDeg;
-      const Eigen::Vector3d v = (std::cos(delta) * from + std::sin(delta) * w).normalized();
-      const double on = OffNadirAzimuth(v).x();
-      if (on < o.min_off_nadir_deg || on > o.max_off_nadir_deg) continue;
-      bool distinct = true;
-      for (const auto& d : dirs) distinct &= std::acos(std::clamp(d.dot(v), -1.0, 1.0)) / kDeg > 3.0;
-      if (distinct) dirs.push_back(v);
-    }
-    if (int(dirs.size()) < o.num_views) continue;
-    bool ok = true;
-    for (const auto& a : dirs) {
-      int partners = 0;
-      for (const auto& b : dirs) {
-        const double ang = std::acos(std::clamp(a.dot(b), -1.0, 1.0)) / kDeg;
-        partners += ang >= lo && ang <= hi;
-      }
-      ok &= partners >= need;
-    }
-    if (!ok) continue;
-    for (const auto& d : dirs) best.push_back(OffNadirAzimuth(d));
-    return best;
-  }
-  ThrowError(ErrorCode::kInvalidArgument, "PlanViews: no view set satisfies the pair constraints");
+ViewPlan PlanViews(const SynthOptions& o, uint64_t seed) {
+  ViewPlanOptions p;
+  p.num_views = o.num_views;
+  p.min_off_nadir_deg = o.min_off_nadir_deg, p.max_off_nadir_deg = o.max_off_nadir_deg;
+  p.azimuth_spread_deg = o.azimuth_spread_deg;
+  p.off_nadir_stratum_width = o.off_nadir_stratum_width;
+  p.min_pair_angle_deg = o.min_pair_angle_deg, p.max_pair_angle_deg = o.max_pair_angle_deg;
+  p.max_pairs_per_image = o.max_pairs_per_image;
+  p.min_partners = o.min_partners;
+  p.target_pairs = o.target_pairs;
+  return PlanViewSet(p, seed);
 }
 
 SynthResult GenerateScene(const std::string& out_dir, const SynthOptions& o, const Progress& progress) {
@@ -148,7 +110,8 @@ SynthResult GenerateScene(const std::string& out_dir, const SynthOptions& o, con
   std::uniform_real_distribution<double> u(0, 1);
   std::normal_distribution<double> normal(0, 1);
 
-  // 1. City around the AOI centre.
+  // 1. View plan (fails fast on impossible constraints), city around the AOI centre.
+  const ViewPlan view_plan = PlanViews(o, o.seed);
   progress.Report(0.0, "city");
   const CrsTransform geo_to_scene(kWgs84Geographic3D, o.crs), scene_to_geo(o.crs, kWgs84Geographic3D);
   Eigen::Vector3d c = geo_to_scene.Apply(Eigen::Vector3d(o.center_lon_lat.x(), o.center_lon_lat.y(), 0));
@@ -201,7 +164,9 @@ SynthResult GenerateScene(const std::string& out_dir, const SynthOptions& o, con
   // 4. Views: exact pushbroom camera, rendering, sensor, RPC fit, GeoTIFF.
   res.sun.azimuth_deg = 110 + 60 * u(gen);
   res.sun.elevation_deg = 50 + 18 * u(gen);
-  const std::vector<Eigen::Vector2d> plan = PlanViews(o, o.seed);
+  const std::vector<Eigen::Vector2d>& plan = view_plan.off_nadir_azimuth_deg;
+  res.pairs = view_plan.pairs;
+  res.candidate_pairs = view_plan.candidate_pairs;
   std::vector<Eigen::Vector3d> cover;
   for (double x : {res.aoi_xmin, res.aoi_xmax})
     for (double y : {res.aoi_ymin, res.aoi_ymax})

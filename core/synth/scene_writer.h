@@ -15,6 +15,7 @@
 #include "core/synth/initial_dsm.h"
 #include "core/synth/pushbroom_camera.h"
 #include "core/synth/render.h"
+#include "core/synth/view_plan.h"
 
 namespace satmesh::synth {
 
@@ -29,7 +30,11 @@ struct SynthOptions {
   int num_views = 10;                  // [2, 64]
   double min_off_nadir_deg = 5, max_off_nadir_deg = 35;    // view sampling range
   double min_pair_angle_deg = 5, max_pair_angle_deg = 13;  // stereo partners' angle range
-  int min_partners = 2;                // partners per view, >= 1 (capped by num_views - 1)
+  int min_partners = 2;                // selected pairs per view, >= 1 (capped by num_views - 1)
+  double azimuth_spread_deg = 360;     // view azimuths stratified over this sector, (0, 360]
+  double off_nadir_stratum_width = 2;  // off-nadir strata width (view_plan.h), >= 0; 0: free
+  int max_pairs_per_image = 4;         // the refinement's pair cap (PairOptions), >= 1
+  int target_pairs = 0;                // plan at least this many selected pairs in all, >= 0
   int margin_px = 16;                  // image margin around the AOI footprint, >= 0
   RenderOptions render;
   SensorOptions sensor;                // gain/offset are varied per image around these
@@ -64,6 +69,8 @@ struct SynthResult {
   double height_min_m = 0, height_max_m = 0;                      // ellipsoidal
   SunLight sun;
   std::vector<SynthView> views;
+  std::vector<std::pair<int, int>> pairs;  // what the refinement's SelectPairs picks (planned)
+  int candidate_pairs = 0;                 // view pairs inside the pair window
   int num_buildings = 0;
   size_t num_faces = 0, num_facade_points = 0, num_roof_cells = 0;
   double initial_roof_nmad_m = 0, initial_roof_p68_m = 0;  // initial DSM vs truth on the mask
@@ -76,11 +83,8 @@ struct SynthResult {
 SynthResult GenerateScene(const std::string& out_dir, const SynthOptions& options,
                           const Progress& progress = {});
 
-// Directions (off-nadir, azimuth) such that every view has min_partners others whose
-// viewing directions intersect at [min_pair_angle, max_pair_angle]. Deterministic in seed.
-std::vector<Eigen::Vector2d> PlanViews(const SynthOptions& options, uint64_t seed);
-// Angle (deg) between the viewing directions (scene towards satellite) of two views.
-double ViewIntersectionAngleDeg(const Eigen::Vector2d& off_nadir_azimuth_a,
-                                const Eigen::Vector2d& off_nadir_azimuth_b);
+// The options' view plan (view_plan.h): azimuths spread over azimuth_spread_deg, every
+// view with min_partners pairs selected by the refinement's rule. Deterministic in seed.
+ViewPlan PlanViews(const SynthOptions& options, uint64_t seed);
 
 }  // namespace satmesh::synth

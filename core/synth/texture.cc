@@ -71,22 +71,27 @@ float Facade(uint32_t v, const Eigen::Vector3f& p, const Eigen::Vector3f& n) {
 
 }  // namespace
 
+// One murmur finaliser over a linear mix of the lattice coordinates (cheap enough to call
+// eight times per noise sample; no visible lattice structure at the scales used).
 float Hash01(int32_t x, int32_t y, int32_t z, uint32_t seed) {
-  uint32_t h = Mix(uint32_t(x) * 0x9e3779b1u ^ Mix(uint32_t(y) * 0x85ebca77u ^
-                                                   Mix(uint32_t(z) * 0xc2b2ae3du ^ seed)));
+  const uint32_t h = Mix(uint32_t(x) * 0x9e3779b1u + uint32_t(y) * 0x85ebca77u +
+                         uint32_t(z) * 0xc2b2ae3du + Mix(seed));
   return float(h >> 8) * (1.f / 16777216.f);
 }
 
 float ValueNoise(const Eigen::Vector3f& p, uint32_t seed) {
   const float fx = std::floor(p.x()), fy = std::floor(p.y()), fz = std::floor(p.z());
-  const int x = int(fx), y = int(fy), z = int(fz);
   const float tx = Smooth(p.x() - fx), ty = Smooth(p.y() - fy), tz = Smooth(p.z() - fz);
-  float c[2][2][2];
-  for (int i = 0; i < 2; ++i)
-    for (int j = 0; j < 2; ++j)
-      for (int k = 0; k < 2; ++k) c[i][j][k] = Hash01(x + i, y + j, z + k, seed);
-  const float a = Lerp(Lerp(c[0][0][0], c[1][0][0], tx), Lerp(c[0][1][0], c[1][1][0], tx), ty);
-  const float b = Lerp(Lerp(c[0][0][1], c[1][0][1], tx), Lerp(c[0][1][1], c[1][1][1], tx), ty);
+  const uint32_t hx = uint32_t(int32_t(fx)) * 0x9e3779b1u, hy = uint32_t(int32_t(fy)) * 0x85ebca77u;
+  const uint32_t hz = uint32_t(int32_t(fz)) * 0xc2b2ae3du + Mix(seed);
+  float c[8];
+  for (int k = 0; k < 8; ++k) {
+    const uint32_t h = Mix(hx + (k & 1) * 0x9e3779b1u + hy + ((k >> 1) & 1) * 0x85ebca77u + hz +
+                           (k >> 2) * 0xc2b2ae3du);
+    c[k] = float(h >> 8) * (1.f / 16777216.f);
+  }
+  const float a = Lerp(Lerp(c[0], c[1], tx), Lerp(c[2], c[3], tx), ty);
+  const float b = Lerp(Lerp(c[4], c[5], tx), Lerp(c[6], c[7], tx), ty);
   return 2.f * Lerp(a, b, tz) - 1.f;
 }
 

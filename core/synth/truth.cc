@@ -30,7 +30,7 @@ std::vector<uint8_t> RoofMask(const RenderScene& scene, const Dsm& truth, double
       r.direction = -Eigen::Vector3f::UnitZ();
     }
   std::vector<RayHit> hits(rays.size());
-  scene.rays().Intersect(rays.data(), hits.data(), rays.size());
+  scene.Intersect(rays.data(), hits.data(), rays.size());
   cv::Mat roof(h, w, CV_8U, cv::Scalar(0));
   cv::Mat material(h, w, CV_8U, cv::Scalar(255));
   for (int j = 0; j < h; ++j)

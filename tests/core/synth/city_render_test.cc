@@ -1,10 +1,12 @@
 // City geometry, textures, rendering, initial DSM degradation, view planning.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
 #include "core/mesh/mesh.h"
+#include "core/refine/pairs.h"
 #include "core/synth/city.h"
 #include "core/synth/initial_dsm.h"
 #include "core/synth/render.h"
@@ -131,20 +133,60 @@ TEST(DegradeDsm, RoofErrorsLikeStereo) {
   EXPECT_GT(std::isfinite(initial.at(58, 150)) ? initial.at(58, 150) : 20.f, 5.f);
 }
 
-TEST(PlanViews, EveryViewHasStereoPartners) {
-  SynthOptions o = SynthPreset("default", 5);
-  const auto views = PlanViews(o, 5);
-  ASSERT_EQ(int(views.size()), o.num_views);
-  for (const auto& a : views) {
-    EXPECT_GE(a.x(), o.min_off_nadir_deg - 1e-9);
-    EXPECT_LE(a.x(), o.max_off_nadir_deg + 1e-9);
-    int partners = 0;
-    for (const auto& b : views) {
-      const double ang = ViewIntersectionAngleDeg(a, b);
-      partners += ang >= 5 && ang <= 13;
+// Every preset's plan: off-nadir in range, azimuths spread, and the refinement's own pair
+// selection (default PairOptions) gives every view at least min_partners pairs.
+TEST(PlanViews, EveryViewHasStereoPartnersUnderTheRefinementsSelection) {
+  for (const char* preset : {"small", "default", "large"}) {
+    const SynthOptions o = SynthPreset(preset, 5);
+    const ViewPlan plan = PlanViews(o, 5);
+    ASSERT_EQ(int(plan.off_nadir_azimuth_deg.size()), o.num_views) << preset;
+    std::vector<PairCandidateView> views;
+    std::vector<double> azimuths;
+    for (const auto& d : plan.off_nadir_azimuth_deg) {
+      EXPECT_GE(d.x(), o.min_off_nadir_deg - 1e-9) << preset;
+      EXPECT_LE(d.x(), o.max_off_nadir_deg + 1e-9) << preset;
+      views.push_back({-SatelliteDirection(d), 1.0});  // towards the ground, as the refinement
+      azimuths.push_back(d.y());
     }
-    EXPECT_GE(partners, 2);
+    const auto pairs = SelectPairs(views, PairOptions{});
+    for (const auto& p : plan.pairs)  // planned inside a shrunk window: a subset
+      EXPECT_NE(std::find(pairs.begin(), pairs.end(), p), pairs.end()) << preset;
+    std::vector<int> count(views.size(), 0);
+    for (const auto& [i, j] : pairs) ++count[i], ++count[j];
+    for (int c : count) EXPECT_GE(c, o.min_partners) << preset;
+    EXPECT_GE(int(pairs.size()), o.target_pairs) << preset;
+    // Largest gap between neighbouring azimuths: strata of spread/N with jitter.
+    std::sort(azimuths.begin(), azimuths.end());
+    double gap = 360 - azimuths.back() + azimuths.front();
+    for (size_t k = 1; k < azimuths.size(); ++k) gap = std::max(gap, azimuths[k] - azimuths[k - 1]);
+    EXPECT_LE(gap, 360 - o.azimuth_spread_deg + 1.8 * o.azimuth_spread_deg / o.num_views) << preset;
   }
+}
+
+TEST(PlanViews, LargePresetSpreadsAroundTheCircleAndOverOffNadir) {
+  const SynthOptions o = SynthPreset("large", 1);
+  const ViewPlan plan = PlanViews(o, 1);
+  double lo = 90, hi = 0;
+  int quadrant[4] = {};
+  for (const auto& d : plan.off_nadir_azimuth_deg) {
+    lo = std::min(lo, d.x()), hi = std::max(hi, d.x());
+    ++quadrant[int(d.y() / 90) % 4];
+  }
+  EXPECT_LT(lo, 10);
+  EXPECT_GT(hi, 28);
+  for (int q : quadrant) EXPECT_GE(q, 5);
+  EXPECT_GE(plan.candidate_pairs, int(plan.pairs.size()));
+}
+
+TEST(PlanViewSet, ImpossibleConstraintsThrow) {
+  ViewPlanOptions o;
+  o.num_views = 4;
+  o.min_off_nadir_deg = 28;  // four oblique views around the circle: no pair under 13 deg
+  o.iterations = 200;
+  EXPECT_THROW(PlanViewSet(o, 1), Error);
+  EXPECT_EQ(ViewPlanOptions{}.Check(), "");
+  o.azimuth_spread_deg = 0;
+  EXPECT_NE(o.Check(), "");
 }
 
 TEST(SynthPreset, UnknownNameThrows) {
