@@ -118,7 +118,7 @@ if [ -n "$git_rev" ]; then
 fi
 echo "build-image: building $tag from ${git_rev:-the working tree} (niced, -j$jobs)"
 cd "$context"
-nice -n 10 buildah bud --isolation chroot --layers --pull=never \
+nice -n 10 buildah bud --isolation chroot --layers --pull=never --format docker \
   --build-arg DEBIAN_IMAGE="$base" --build-arg BUILD_JOBS="$jobs" \
   -f docker/Dockerfile -t "$tag" .
 buildah images --format '{{.Name}}:{{.Tag}} {{.Size}}' "$tag"
