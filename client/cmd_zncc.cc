@@ -6,6 +6,7 @@
 #include "client/args.h"
 #include "client/bench_support.h"
 #include "client/command.h"
+#include "core/refine/bias_estimation.h"
 #include "core/refine/refine.h"
 #include "core/refine/virtual_camera.h"
 
@@ -28,23 +29,37 @@ double PairAngleDeg(const RefineInput& input, int a, int b) {
 }
 
 int RunZncc(const std::vector<std::string>& argv) {
-  const Args args(argv, {"help"});
+  const Args args(argv, {"help", "estimate-bias"});
   if (args.Has("help") || !args.Has("job") || !args.Has("mesh") || !args.Has("pairs")) {
     std::printf(
         "usage: satmesh zncc --job JOB.json --mesh MESH [--mesh MESH ...] --pairs I-J[,I-J...]\n"
-        "                    [--level L] [--set key=value ...]\n"
+        "                    [--level L] [--estimate-bias [--bias-pairs I-J,...]] [--set key=value ...]\n"
         "  Mean ZNCC of each surface over the pairs (indices into the job's images, as the job\n"
         "  runner keeps them) at pyramid level L (default 0), with the job's ZNCC options. No\n"
         "  pair-angle filter. MESH: a mesh file (CRS from the file, else the initial DSM's), a\n"
-        "  refine result directory (its mesh.ply), a DSM .tif, or 'initial' (the job's DSM).\n");
+        "  refine result directory (its mesh.ply), a DSM .tif, or 'initial' (the job's DSM).\n"
+        "  RPC biases: the job's images[].bias; --estimate-bias adds shifts estimated over the\n"
+        "  job's INITIAL surface (as `satmesh bias`; pairs: the refinement's, or --bias-pairs),\n"
+        "  so a held-out view is aligned to the initial surface, not to the measured ones.\n");
     return args.Has("help") ? kExitOk : kExitUsage;
   }
   const JobSpec spec = ReadJobWithOverrides(args.Require("job"), args.GetAll("set"));
-  const TileInput input = PrepareJobInput(spec);
+  TileInput input = PrepareJobInput(spec);
   const int num_views = int(input.refine.views.size());
-  for (int v = 0; v < num_views; ++v)
-    std::printf("view %d: %s (%dx%d window)\n", v, input.view_names[v].c_str(),
-                input.refine.views[v].image.width, input.refine.views[v].image.height);
+  if (args.Has("estimate-bias")) {
+    BiasOptions bias;
+    bias.refine = spec.refine;
+    const auto bias_pairs = args.Has("bias-pairs")
+                                ? ParsePairs(args.Require("bias-pairs"), num_views)
+                                : SelectRefinePairs(input.refine, spec.refine);
+    ApplyViewBiases(EstimateViewBiases(input.refine, bias_pairs, bias), &input.refine);
+  }
+  for (int v = 0; v < num_views; ++v) {
+    const RefineView& view = input.refine.views[v];
+    std::printf("view %d: %s (%dx%d window), RPC bias %+.3f %+.3f px (col, row)\n", v,
+                input.view_names[v].c_str(), view.image.width, view.image.height,
+                view.rpc.bias().x(), view.rpc.bias().y());
+  }
   const auto pairs = ParsePairs(args.Require("pairs"), num_views);
   for (const auto& [a, b] : pairs)
     std::printf("pair %d-%d: intersection angle %.2f deg\n", a, b, PairAngleDeg(input.refine, a, b));

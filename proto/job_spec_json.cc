@@ -68,10 +68,12 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "visibility_tolerance_gsd") r->visibility_tolerance_gsd = Number(v, path);
     else if (key == "min_ray_cos") r->min_ray_cos = Number(v, path);
     else if (key == "virtual_camera_grid_px") r->virtual_camera_grid_px = Integer(v, path);
+    else if (key == "full_raycast_every") r->full_raycast_every = Integer(v, path);
     else if (key == "coarse_edge_px") r->coarse_edge_px = Number(v, path);
     else if (key == "remesh_coarse") r->remesh_coarse = Boolean(v, path);
     else if (key == "normalize_by_pair_count") r->normalize_by_pair_count = Boolean(v, path);
     else if (key == "hold_boundary_xy") r->hold_boundary_xy = Boolean(v, path);
+    else if (key == "estimate_bias") r->estimate_bias = Boolean(v, path);
     else if (key == "min_pair_angle_deg") r->pairs.min_angle_deg = Number(v, path);
     else if (key == "max_pair_angle_deg") r->pairs.max_angle_deg = Number(v, path);
     else if (key == "max_pairs_per_image") r->pairs.max_pairs_per_image = Integer(v, path);
@@ -212,11 +214,19 @@ json LevelsToJson(const std::vector<LevelStats>& levels) {
                    {"mean_zncc_start", l.mean_zncc.empty() ? 0.0 : l.mean_zncc.front()},
                    {"mean_zncc_end", l.mean_zncc.empty() ? 0.0 : l.mean_zncc.back()},
                    {"time_s", {{"raycast", l.times.raycast_s},
+                               {"intersect", l.times.intersect_s},
                                {"gradient", l.times.gradient_s},
                                {"smoothness", l.times.smoothness_s},
                                {"update", l.times.update_s},
                                {"level", l.level_s}}}});
   }
+  return out;
+}
+
+// Estimated RPC bias per view: [[col, row], ...] in full-resolution pixels.
+json BiasesToJson(const std::vector<Eigen::Vector2d>& biases) {
+  json out = json::array();
+  for (const auto& b : biases) out.push_back({b.x(), b.y()});
   return out;
 }
 
@@ -258,7 +268,9 @@ json TileResultToJson(const JobPlan& plan, const TileResult& t) {
   j["image_mb"] = t.image_mb;
   j["peak_rss_mb"] = t.peak_rss_mb;
   j["levels"] = LevelsToJson(t.refine.levels);
-  j["time_s"] = {{"prepare", t.prepare_s}, {"refine", t.refine_s}, {"write", t.write_s}};
+  if (!t.view_bias_px.empty()) j["bias_px"] = BiasesToJson(t.view_bias_px);
+  j["time_s"] = {{"prepare", t.prepare_s}, {"bias", t.bias_s}, {"refine", t.refine_s},
+                 {"write", t.write_s}};
   return j;
 }
 
@@ -284,6 +296,7 @@ TileResult TileResultFromJson(const JobPlan& plan, const json& j) {
   t.peak_rss_mb = j.value("peak_rss_mb", 0.0);
   if (j.contains("time_s")) {
     t.prepare_s = j["time_s"].value("prepare", 0.0);
+    t.bias_s = j["time_s"].value("bias", 0.0);
     t.refine_s = j["time_s"].value("refine", 0.0);
     t.write_s = j["time_s"].value("write", 0.0);
   }
@@ -320,7 +333,7 @@ json JobMetricsToJson(const JobOutputs& o) {
   json pairs = json::array();
   for (const auto& [i, j] : o.refine.pairs) pairs.push_back({i, j});
   const double cell = o.plan.dsm.geo_transform[1];
-  return {{"views", o.view_names},  // single-tile jobs (as before tiling)
+  json metrics = {{"views", o.view_names},  // single-tile jobs (as before tiling)
           {"pairs", pairs},
           {"gsd_m", o.refine.gsd_m},
           {"levels", LevelsToJson(o.refine.levels)},
@@ -343,6 +356,10 @@ json JobMetricsToJson(const JobOutputs& o) {
                       {"refine", refine_s}, {"write", o.write_s}, {"total", o.total_s}}},
           {"outputs", {{"mesh", "mesh.ply"}, {"dsm", "dsm.tif"}, {"tileset", "tileset.json"},
                        {"metrics", "metrics.json"}, {"tiles", "tiles/"}}}};
+  // Single-tile jobs: the estimated biases at top level too, next to "views".
+  if (o.tiles.size() == 1 && !o.tiles[0].view_bias_px.empty())
+    metrics["bias_px"] = BiasesToJson(o.tiles[0].view_bias_px);
+  return metrics;
 }
 
 json RefineMetricsToJson(const JobOutputs& outputs) { return JobMetricsToJson(outputs); }

@@ -35,8 +35,9 @@ struct RefineOptions {
   bool normalize_by_pair_count = true;  // divide each vertex's photometric gradient by the
                                         // number of pair-directions that saw it (OpenMVS)
   bool hold_boundary_xy = true;    // boundary vertices move vertically only (tile seams)
-  bool estimate_bias = false;      // per-view RPC bias shift estimated over the initial surface
-                                   // before refining (core/refine/bias_estimation.h)
+  bool estimate_bias = true;       // per-view RPC bias shift estimated over the initial surface
+                                   // before refining (core/refine/bias_estimation.h; Pléiades:
+                                   // ZNCC 0.67 -> 0.79, synthetic without bias: <= 0.11 px)
   PairOptions pairs;
 
   std::string Check() const;

@@ -31,7 +31,9 @@ struct TileResult {
   std::array<double, 16> transform{};
   double image_mb = 0;              // image windows held while refining (full resolution)
   double peak_rss_mb = 0;           // process peak resident memory after the tile
-  double prepare_s = 0, refine_s = 0, write_s = 0;
+  std::vector<Eigen::Vector2d> view_bias_px;  // estimate_bias: shift added per view (col,
+                                              // row; full-res px), in view_names order
+  double prepare_s = 0, bias_s = 0, refine_s = 0, write_s = 0;
 };
 
 // Files of a tile under out_dir/tiles/ (relative to out_dir).
