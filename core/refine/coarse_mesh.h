@@ -2,6 +2,7 @@
 // The coarse mesh the refinement starts from (paper 3.3): the initial surface remeshed
 // isotropically (CGAL) to a target edge length, so triangles are well shaped on walls
 // too. Boundary edges are kept on the boundary (split, never moved inward).
+#include "core/common/progress.h"
 #include "core/mesh/mesh.h"
 
 namespace satmesh {
@@ -13,7 +14,14 @@ struct CoarseMeshOptions {
 };
 
 // Non-manifold faces of the input are dropped (logged). Throws Error{kInvalidInput} if
-// nothing is left.
-TriangleMesh RemeshIsotropic(const TriangleMesh& mesh, const CoarseMeshOptions& options);
+// nothing is left, Error{kCancelled} between remeshing iterations when progress says so.
+// The result is sorted spatially (SortSpatially).
+TriangleMesh RemeshIsotropic(const TriangleMesh& mesh, const CoarseMeshOptions& options,
+                             const Progress& progress = {});
+
+// Renumbers vertices along a Z-order curve and orders faces by their first vertex, so
+// that everything indexed by face or vertex (normals, hits, gradients, Embree's
+// primitives) is read in nearly sequential order by neighbouring pixels.
+void SortSpatially(TriangleMesh* mesh);
 
 }  // namespace satmesh

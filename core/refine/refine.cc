@@ -254,6 +254,7 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
 
   // Radiometric normalisation and pyramids; viewing directions for pair selection.
   std::vector<ViewSource> sources = MakeViewSources(input, options.levels);
+  progress.ThrowIfCancelled();
   std::vector<PairCandidateView> candidates(input.views.size());
   double gsd_sum = 0;
   for (size_t v = 0; v < input.views.size(); ++v) {
@@ -278,11 +279,14 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
   if (options.remesh_coarse) {
     CoarseMeshOptions coarse;
     coarse.target_edge_m = options.coarse_edge_px * result.gsd_m * std::ldexp(1.0, options.levels);
-    mesh = RemeshIsotropic(mesh, coarse);
+    mesh = RemeshIsotropic(mesh, coarse, progress);
   }
   const LevelContext ctx{input, options, progress, sources, result.pairs, result.gsd_m};
   for (int level = options.levels; level >= 0; --level) {
-    if (level < options.levels) mesh = Subdivide1To4(mesh);
+    if (level < options.levels) {
+      mesh = Subdivide1To4(mesh);
+      SortSpatially(&mesh);
+    }
     result.levels.push_back(RefineLevel(ctx, level, &mesh));
   }
   result.mesh = std::move(mesh);

@@ -141,7 +141,11 @@ void WriteJobJson(const std::string& path, const SynthOptions& o, const SynthRes
   for (size_t i = 0; i < r.views.size(); ++i)
     s << "    {\"href\": \"" << r.views[i].image << "\"}" << (i + 1 < r.views.size() ? ",\n" : "\n");
   s << "  ],\n  \"initial\": {\"dsm\": \"initial/dsm.tif\"},\n  \"outputs\": {\"crs\": \"" << o.crs
-    << "\"}\n}\n";
+    << "\"}";
+  // The RPCs are exact unless a bias was injected: estimating one over the (degraded)
+  // initial surface would only add its ~0.1 px noise (BENCHMARKS.md).
+  if (o.rpc_bias_sigma_px == 0) s << ",\n  \"options\": {\"estimate_bias\": false}";
+  s << "\n}\n";
   std::ofstream f(path);
   f << s.str();
   SATMESH_CHECK(f.good(), ErrorCode::kIo, "cannot write " + path);
