@@ -37,7 +37,8 @@ void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
   const float min_cos = float(options.min_ray_cos);
   const int wj = vj.width(), hj = vj.height();
   const RayHit* hits_i = vi.hit_map.hits.data();
-  const RayHit* hits_j = vj.hit_map.hits.data();
+  const int* faces_j = vj.hit_map.faces.data();
+  const bool have_cos = vi.hit_map.ray_cos.size() == n;  // else computed here
 
 #pragma omp parallel for schedule(dynamic, 8)
   for (int row = 0; row < h; ++row) {
@@ -46,7 +47,8 @@ void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
       const RayHit& hit = hits_i[p];
       if (!hit.hit()) continue;
       const Eigen::Vector3f& ray_dir = vi.rays[p].direction;
-      const float cos_ray = ray_dir.dot(face_normals[hit.face]);
+      const float cos_ray =
+          have_cos ? vi.hit_map.ray_cos[p] : ray_dir.dot(face_normals[hit.face]);
       if (cos_ray > -min_cos) continue;  // grazing or back-facing
       const Eigen::Vector3f& X = vi.hit_map.points[p];
       Eigen::Matrix<double, 2, 3> pixel_from_local;
@@ -54,9 +56,9 @@ void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
       if (!(xj.x() >= 1.0 && xj.y() >= 1.0 && xj.x() < wj - 1.0 && xj.y() < hj - 1.0)) continue;
       // Visibility in j: j's own ray through that pixel must hit the same surface point.
       const size_t q = size_t(int(xj.y())) * wj + int(xj.x());
-      const RayHit& hit_j = hits_j[q];
-      if (!hit_j.hit()) continue;
-      if (hit_j.face != hit.face && (vj.hit_map.points[q] - X).squaredNorm() > tol2) continue;
+      const int face_j = faces_j[q];
+      if (face_j < 0) continue;
+      if (face_j != hit.face && (vj.hit_map.points[q] - X).squaredNorm() > tol2) continue;
       float b, db_dx, db_dy;
       SampleInside(vj.image, xj.x(), xj.y(), &b, &db_dx, &db_dy);
       // DΠ_j in the local frame (the projection holds the chain rule through the frame).

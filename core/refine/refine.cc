@@ -75,6 +75,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
                        const PhotometricOptions& options, std::vector<Eigen::Vector3d>* gradient,
                        std::vector<int>* seen) {
   const auto normals = FaceNormals(mesh);
+  for (auto& v : views) SetRayCosines(normals, &v);
   std::vector<std::pair<int, int>> directions;
   for (const auto& [i, j] : pairs) directions.insert(directions.end(), {{i, j}, {j, i}});
   const bool accumulate = gradient || seen;

@@ -53,15 +53,27 @@ double CastHitMap(const RayScene& scene, ViewLevel* view) {
   const size_t n = view->rays.size();
   map.hits.resize(n);
   map.points.resize(n);
+  map.faces.resize(n);
   const auto start = std::chrono::steady_clock::now();
   scene.IntersectImage(view->rays.data(), view->width(), view->height(), map.hits.data());
   const double intersect_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < long(n); ++i) {
+    map.faces[i] = map.hits[i].face;
     if (map.hits[i].hit()) map.points[i] = view->rays[i].origin + map.hits[i].t * view->rays[i].direction;
   }
   return intersect_s;
+}
+
+void SetRayCosines(const std::vector<Eigen::Vector3f>& face_normals, ViewLevel* view) {
+  HitMap& map = view->hit_map;
+  map.ray_cos.resize(map.hits.size());
+#pragma omp parallel for schedule(static)
+  for (long p = 0; p < long(map.hits.size()); ++p) {
+    const int face = map.hits[p].face;
+    map.ray_cos[p] = face >= 0 ? view->rays[p].direction.dot(face_normals[face]) : 0.f;
+  }
 }
 
 namespace {
@@ -154,6 +166,7 @@ HitMapUpdate UpdateHitMap(const RayScene& scene, const TriangleMesh& mesh, float
   for (size_t k = 0; k < recast.size(); ++k) {
     const uint32_t p = recast[k];
     map.hits[p] = hits[k];
+    map.faces[p] = hits[k].face;
     if (hits[k].hit()) map.points[p] = rays[k].origin + hits[k].t * rays[k].direction;
   }
   update.kept = kept;

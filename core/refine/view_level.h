@@ -15,6 +15,10 @@ namespace satmesh {
 struct HitMap {
   std::vector<RayHit> hits;             // one per pixel, row-major
   std::vector<Eigen::Vector3f> points;  // hit points (frame), valid where hits[i].hit()
+  std::vector<int> faces;               // hits[i].face again, 4 bytes a pixel: other views'
+                                        // visibility lookups land at random pixels
+  std::vector<float> ray_cos;           // ray · face normal per hit pixel (SetRayCosines);
+                                        // shared by all pair-directions from this view
 };
 
 struct ViewLevel {
@@ -46,6 +50,10 @@ ViewLevel MakeViewLevel(int view, int level, ImageF image_level, const RpcModel&
 // Casts all rays of the view against the scene (the paper's dominant cost: once per view
 // per iteration, shared by all pairs). Returns the seconds spent in Embree's Intersect.
 double CastHitMap(const RayScene& scene, ViewLevel* view);
+
+// Fills view->hit_map.ray_cos for the current face normals (one random normal read per
+// pixel per iteration instead of one per pair-direction).
+void SetRayCosines(const std::vector<Eigen::Vector3f>& face_normals, ViewLevel* view);
 
 struct HitMapUpdate {
   long kept = 0, recast = 0;  // pixels re-intersected with their own face / traced again
