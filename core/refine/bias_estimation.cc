@@ -151,10 +151,12 @@ Eigen::Vector2d QuadraticStep(ShiftObjective& f, const Eigen::Vector2d& d, doubl
 
 // Coarse grid search, then 3x3 quadratic steps level by level down to full resolution.
 Eigen::Vector2d SolveView(const Problem& pb, int view, const std::vector<int>& neighbours,
-                          int coarse_level, double* zncc_before, double* zncc_after) {
+                          int coarse_level, const Progress& progress, double* zncc_before,
+                          double* zncc_after) {
   const BiasOptions& o = pb.options;
   Eigen::Vector2d d(0, 0);
   for (int level = coarse_level; level >= 0; --level) {
+    progress.ThrowIfCancelled();
     ShiftObjective f(pb, view, neighbours, level);
     if (level == coarse_level) {
       const int n = int(std::floor(o.search_radius_px / o.coarse_step_px));
@@ -213,7 +215,7 @@ std::vector<std::pair<int, int>> SelectRefinePairs(const RefineInput& input,
 
 BiasEstimate EstimateViewBiases(const RefineInput& input,
                                 const std::vector<std::pair<int, int>>& pairs,
-                                const BiasOptions& options) {
+                                const BiasOptions& options, const Progress& progress) {
   const std::string problem = options.Check();
   SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "bias options: " + problem);
   const int nv = int(input.views.size());
@@ -263,7 +265,7 @@ BiasEstimate EstimateViewBiases(const RefineInput& input,
       if (neighbours.size() > best_neighbours.size()) view = v, best_neighbours = neighbours;
     }
     if (view < 0) break;
-    const Eigen::Vector2d d = SolveView(pb, view, best_neighbours, coarse_level,
+    const Eigen::Vector2d d = SolveView(pb, view, best_neighbours, coarse_level, progress,
                                         &out.zncc_before[view], &out.zncc_after[view]);
     out.bias_col_row_px[view] = d;
     out.solved[view] = true;

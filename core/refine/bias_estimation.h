@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/common/progress.h"
 #include "core/refine/refine.h"
 
 namespace satmesh {
@@ -36,11 +37,12 @@ std::vector<std::pair<int, int>> SelectRefinePairs(const RefineInput& input,
                                                    const RefineOptions& options);
 
 // Throws Error{kInvalidArgument} if options.Check() fails or a pair index is out of
-// range, Error{kInvalidInput} for an empty initial mesh. input's RPCs may already carry
-// a bias; the estimate is added to it.
+// range, Error{kInvalidInput} for an empty initial mesh, Error{kCancelled} (checked per
+// view and level) when progress says so. input's RPCs may already carry a bias; the
+// estimate is added to it.
 BiasEstimate EstimateViewBiases(const RefineInput& input,
                                 const std::vector<std::pair<int, int>>& pairs,
-                                const BiasOptions& options = {});
+                                const BiasOptions& options = {}, const Progress& progress = {});
 
 // input with each view's RPC bias increased by estimate.bias_col_row_px[v].
 void ApplyViewBiases(const BiasEstimate& estimate, RefineInput* input);

@@ -141,7 +141,8 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
       BiasOptions bias;
       bias.refine = spec.refine;
       const BiasEstimate estimate =
-          EstimateViewBiases(input.refine, SelectRefinePairs(input.refine, spec.refine), bias);
+          EstimateViewBiases(input.refine, SelectRefinePairs(input.refine, spec.refine), bias,
+                             progress);
       ApplyViewBiases(estimate, &input.refine);
       r.view_bias_px = estimate.bias_col_row_px;
       r.bias_s = Seconds(t0);
