@@ -13,31 +13,13 @@
 #include "core/mesh/topology.h"
 #include "core/refine/photometric_gradient.h"
 #include "core/refine/view_level.h"
+#include "core/refine/view_setup.h"
 #include "core/refine/virtual_camera.h"
 
 namespace satmesh {
 namespace {
 
 std::string Num(double v) { return std::to_string(v); }
-
-// Full-resolution GSD of a view at the frame centre (as the refinement computes it).
-double GroundSamplingDistance(const RpcModel& rpc, const LocalFrame& frame) {
-  Eigen::Matrix<double, 2, 3> pixel_from_geo;
-  rpc.PixelFromGeo(frame.center_lon_lat_h(), &pixel_from_geo);
-  const Eigen::Matrix<double, 2, 3> pixel_from_local =
-      pixel_from_geo * frame.GeoFromLocalScale().asDiagonal();
-  return 1.0 / std::sqrt(std::abs(pixel_from_local.leftCols<2>().determinant()));
-}
-
-PhotometricOptions PhotometricOptionsAt(const RefineOptions& opt, double gsd_m) {
-  PhotometricOptions photo;
-  photo.zncc.window_radius = opt.zncc_window_radius;
-  photo.zncc.min_valid_fraction = opt.min_window_valid;
-  photo.zncc.variance_floor = opt.variance_floor;
-  photo.visibility_tolerance_m = opt.visibility_tolerance_gsd * gsd_m;
-  photo.min_ray_cos = opt.min_ray_cos;
-  return photo;
-}
 
 // The fixed part of the problem: pyramids, the initial surface and its ray scene.
 struct Problem {
@@ -199,17 +181,10 @@ std::string BiasOptions::Check() const {
 std::vector<std::pair<int, int>> SelectRefinePairs(const RefineInput& input,
                                                    const RefineOptions& options) {
   std::vector<PairCandidateView> candidates(input.views.size());
-  for (size_t v = 0; v < input.views.size(); ++v) {
-    const ImageF normalised = NormalizeRadiometry(input.views[v].image);
-    double sum = 0, sum2 = 0;
-    for (float p : normalised.pixels) sum += p, sum2 += double(p) * p;
-    const double n = double(std::max<size_t>(1, normalised.pixels.size()));
-    candidates[v].contrast = std::sqrt(std::max(0.0, sum2 / n - (sum / n) * (sum / n)));
-    const VirtualCamera camera(input.views[v].rpc, input.frame, normalised.width, normalised.height,
-                               input.min_z - 1, input.max_z + 1,
-                               std::max(normalised.width, normalised.height));
-    candidates[v].direction = camera.CentralDirection();
-  }
+  for (size_t v = 0; v < input.views.size(); ++v)
+    candidates[v] = MakePairCandidate(input.views[v].rpc, input.frame,
+                                      NormalizeRadiometry(input.views[v].image), input.min_z,
+                                      input.max_z);
   return SelectPairs(candidates, options.pairs);
 }
 

@@ -15,6 +15,7 @@
 #include "core/refine/photometric_gradient.h"
 #include "core/refine/thin_plate.h"
 #include "core/refine/view_level.h"
+#include "core/refine/view_setup.h"
 
 namespace satmesh {
 namespace {
@@ -22,23 +23,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
-// Full-resolution ground sampling distance of a view at the frame centre (mean terrain).
-double GroundSamplingDistance(const RpcModel& rpc, const LocalFrame& frame) {
-  Eigen::Matrix<double, 2, 3> pixel_from_geo;
-  rpc.PixelFromGeo(frame.center_lon_lat_h(), &pixel_from_geo);
-  const Eigen::Matrix<double, 2, 3> pixel_from_local =
-      pixel_from_geo * frame.GeoFromLocalScale().asDiagonal();
-  const double det = std::abs(pixel_from_local.leftCols<2>().determinant());  // px² per m²
-  return 1.0 / std::sqrt(det);
-}
-
-double StdDev(const ImageF& image) {
-  double sum = 0, sum2 = 0;
-  for (float v : image.pixels) sum += v, sum2 += double(v) * v;
-  const double n = double(image.pixels.size());
-  return std::sqrt(std::max(0.0, sum2 / n - (sum / n) * (sum / n)));
 }
 
 void CheckInput(const RefineInput& input) {
@@ -122,16 +106,6 @@ std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
     }
   }
   return views;
-}
-
-PhotometricOptions PhotometricOptionsAt(const RefineOptions& opt, double gsd) {
-  PhotometricOptions photo;
-  photo.zncc.window_radius = opt.zncc_window_radius;
-  photo.zncc.min_valid_fraction = opt.min_window_valid;
-  photo.zncc.variance_floor = opt.variance_floor;
-  photo.visibility_tolerance_m = opt.visibility_tolerance_gsd * gsd;
-  photo.min_ray_cos = opt.min_ray_cos;
-  return photo;
 }
 
 std::vector<ViewSource> MakeViewSources(const RefineInput& input, int levels) {
@@ -259,12 +233,8 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
   std::vector<PairCandidateView> candidates(input.views.size());
   double gsd_sum = 0;
   for (size_t v = 0; v < input.views.size(); ++v) {
-    const ImageF& normalised = sources[v].pyramid[0];
-    candidates[v].contrast = StdDev(normalised);
-    const VirtualCamera camera(input.views[v].rpc, input.frame, normalised.width,
-                               normalised.height, input.min_z - 1, input.max_z + 1,
-                               std::max(normalised.width, normalised.height));
-    candidates[v].direction = camera.CentralDirection();
+    candidates[v] = MakePairCandidate(input.views[v].rpc, input.frame, sources[v].pyramid[0],
+                                      input.min_z, input.max_z);
     gsd_sum += GroundSamplingDistance(input.views[v].rpc, input.frame);
   }
   result.gsd_m = gsd_sum / input.views.size();
