@@ -12,6 +12,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include "tests/scratch_dir.h"
 
 namespace satmesh::server::testing {
 
@@ -20,6 +21,7 @@ inline std::string TempDir(const std::string& name) {
                    ("satmesh_server_test_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  satmesh::testing::RemoveAtExit(dir);
   return dir.string();
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/common/error.h"
+#include "tests/scratch_dir.h"
 
 namespace satmesh {
 namespace {
@@ -17,6 +18,7 @@ fs::path TempDir() {
   const fs::path dir = fs::temp_directory_path() /
                        ("satmesh_image_io_" + std::to_string(::getpid()));
   fs::create_directories(dir);
+  testing::RemoveAtExit(dir);
   return dir;
 }
 

@@ -13,6 +13,7 @@
 
 #include "core/common/error.h"
 #include "tests/core/mesh/mesh_fixtures.h"
+#include "tests/scratch_dir.h"
 
 namespace satmesh {
 namespace {
@@ -22,6 +23,7 @@ namespace fs = std::filesystem;
 std::string TempPath(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("satmesh_mesh_io_" + std::to_string(::getpid()));
   fs::create_directories(dir);
+  testing::RemoveAtExit(dir);
   return (dir / name).string();
 }
 

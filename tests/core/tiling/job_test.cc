@@ -15,6 +15,7 @@
 #include "core/synth/scene_writer.h"
 #include "core/tiling/job.h"
 #include "proto/job_spec_json.h"
+#include "tests/scratch_dir.h"
 
 namespace satmesh {
 namespace {
@@ -53,6 +54,7 @@ class TiledJob : public ::testing::Test {
     const auto dir =
         fs::temp_directory_path() / ("tiling_job_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(dir);
+    testing::RemoveAtExit(dir);
     return dir.string();
   }
   static std::string scene_;

@@ -6,6 +6,7 @@
 #include "core/common/error.h"
 #include "core/geo/crs.h"
 #include "core/tiling/tile_plan.h"
+#include "tests/scratch_dir.h"
 
 namespace satmesh {
 namespace {
@@ -21,6 +22,7 @@ std::string WriteTestDsm(const std::string& name, const std::string& crs = "EPSG
     for (int i = 0; i < dsm.width; ++i) dsm.at(i, j) = float(i);
   const auto path = std::filesystem::temp_directory_path() / ("tiling_plan_" + name + ".tif");
   WriteDsm(path.string(), dsm);
+  testing::RemoveAtExit(path);
   return path.string();
 }
 
