@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "core/common/error.h"
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/coarse_mesh.h"
+#include "core/refine/hit_map_raster.h"
 #include "core/refine/pairs.h"
 #include "core/refine/photometric_gradient.h"
 #include "core/refine/thin_plate.h"
@@ -130,7 +132,9 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
                                                 opt.virtual_camera_grid_px, &slot);
   const PhotometricOptions photo = PhotometricOptionsAt(opt, gsd);
 
-  RayScene scene(*mesh);
+  std::optional<RayScene> scene;  // Embree, unless the hit maps are rasterized
+  if (!opt.rasterize_hit_maps) scene.emplace(*mesh);
+  RasterWorkspace raster;
   const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
   const size_t nv = mesh->vertices.size();
   stats.num_vertices = int(nv);
@@ -142,11 +146,13 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
     ctx.progress.ThrowIfCancelled();
     const bool last = it == opt.iterations_per_level;
     auto t0 = Clock::now();
-    if (it % opt.full_raycast_every == 0) {
-      for (auto& v : views) stats.times.intersect_s += CastHitMap(scene, &v);
+    if (opt.rasterize_hit_maps) {
+      for (auto& v : views) RasterizeHitMap(*mesh, &v, &raster);
+    } else if (it % opt.full_raycast_every == 0) {
+      for (auto& v : views) stats.times.intersect_s += CastHitMap(*scene, &v);
     } else {
       for (auto& v : views) {
-        const HitMapUpdate u = UpdateHitMap(scene, *mesh, /*edge_tolerance=*/0.02f,
+        const HitMapUpdate u = UpdateHitMap(*scene, *mesh, /*edge_tolerance=*/0.02f,
                                             /*depth_jump_m=*/float(3 * gsd), &v);
         stats.times.intersect_s += u.intersect_s;
         stats.recast_fraction += double(u.recast) / std::max(1L, u.kept + u.recast);
@@ -183,7 +189,7 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
       if (len > max_move) move *= max_move / len;
       mesh->vertices[v] += move.cast<float>();
     }
-    scene.UpdateVertices(mesh->vertices);
+    if (scene) scene->UpdateVertices(mesh->vertices);
     stats.times.update_s += Seconds(t0);
     ++stats.iterations;
     const double done = (opt.levels - level + double(it + 1) / (opt.iterations_per_level + 1));

@@ -10,6 +10,7 @@
 
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
+#include "core/refine/hit_map_raster.h"
 #include "core/refine/photometric_gradient.h"
 #include "core/refine/projection_grid.h"
 #include "core/refine/thin_plate.h"
@@ -187,6 +188,14 @@ void BM_CastHitMap(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * view.rays.size());
 }
 BENCHMARK(BM_CastHitMap)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+
+void BM_RasterizeHitMap(benchmark::State& state) {  // the same hit map without Embree
+  ViewLevel view = MakeView(0, 20, 30);
+  RasterWorkspace workspace;
+  for (auto _ : state) RasterizeHitMap(CityMesh(), &view, &workspace);
+  state.SetItemsProcessed(state.iterations() * view.rays.size());
+}
+BENCHMARK(BM_RasterizeHitMap)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_MakeViewLevel(benchmark::State& state) {  // virtual camera + lattice + 1M rays
   for (auto _ : state) benchmark::DoNotOptimize(MakeView(0, 20, 30));

@@ -70,6 +70,28 @@ TEST(Refine, TiltedPlaneStartedMetresOffConverges) {
     EXPECT_GT(level.mean_zncc.back(), level.mean_zncc.front()) << "level " << level.level;
 }
 
+// The default rasterized hit maps and Embree's ray casting give the same refinement.
+TEST(Refine, RasterizedAndRayCastHitMapsAgree) {
+  const testing::Plane plane;
+  const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                             testing::PlaneMesh(plane, 40, 1.0, 3.0));
+  RefineOptions raycast = SmallOptions();
+  raycast.rasterize_hit_maps = false;
+  const RefineResult a = Refine(input, SmallOptions()), b = Refine(input, raycast);
+  ASSERT_EQ(a.mesh.vertices.size(), b.mesh.vertices.size());
+  ASSERT_EQ(a.levels.size(), b.levels.size());
+  for (size_t l = 0; l < a.levels.size(); ++l)
+    for (size_t k = 0; k < a.levels[l].mean_zncc.size(); ++k)
+      EXPECT_NEAR(a.levels[l].mean_zncc[k], b.levels[l].mean_zncc[k], 1e-4) << "level " << l;
+  double max_diff = 0;
+  for (size_t v = 0; v < a.mesh.vertices.size(); ++v)
+    max_diff = std::max(max_diff, double((a.mesh.vertices[v] - b.mesh.vertices[v]).norm()));
+  std::printf("max vertex difference %.2e m\n", max_diff);
+  EXPECT_LT(max_diff, 0.01);  // metres, 0.02 GSD
+  EXPECT_GT(b.levels.back().times.intersect_s, 0);   // Embree did trace
+  EXPECT_EQ(a.levels.back().times.intersect_s, 0);   // and was not needed
+}
+
 TEST(Refine, CancelledRunSaysSo) {
   const testing::Plane plane;
   const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),

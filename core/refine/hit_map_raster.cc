@@ -1,0 +1,122 @@
+#include "core/refine/hit_map_raster.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace satmesh {
+namespace {
+
+// Edge function e(p) = A x + B y + C of the directed edge s -> t: twice the signed area
+// of (s, t, p). The coefficients come from the lower vertex index first, so the two
+// triangles of an edge evaluate the same numbers (with opposite signs): a pixel centre
+// on the edge is inside one of them or both, never neither.
+struct Edge {
+  double A, B, C;
+  double operator()(double x, double y) const { return A * x + B * y + C; }
+};
+inline Edge MakeEdge(const Eigen::Vector2d* pixels, int s, int t) {
+  const bool swap = s > t;
+  const Eigen::Vector2d& a = pixels[swap ? t : s];
+  const Eigen::Vector2d& b = pixels[swap ? s : t];
+  const double A = a.y() - b.y(), B = b.x() - a.x();
+  const double C = -(A * a.x() + B * a.y());
+  return swap ? Edge{-A, -B, -C} : Edge{A, B, C};
+}
+
+// The view's mean ray direction (unit), from the central pixel's ray.
+Eigen::Vector3f MeanRayDirection(const ViewLevel& view) {
+  const size_t centre = size_t(view.height() / 2) * view.width() + view.width() / 2;
+  return view.rays[centre].direction.normalized();
+}
+
+// Rasterizes every face into rows [row_begin, row_end): face id, barycentrics and depth
+// of the nearest face per pixel centre.
+void RasterizeBand(const TriangleMesh& mesh, const RasterWorkspace& ws, int width, int row_begin,
+                   int row_end, std::vector<RayHit>* hits, float* depth) {
+  const Eigen::Vector2d* px = ws.pixels.data();
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Eigen::Vector3i& face = mesh.faces[f];
+    const Eigen::Vector2d &a = px[face[0]], &b = px[face[1]], &c = px[face[2]];
+    const double min_y = std::min({a.y(), b.y(), c.y()}), max_y = std::max({a.y(), b.y(), c.y()});
+    // Rows whose centre (row + 0.5) lies in [min_y, max_y]; NaN fails both tests.
+    if (!(max_y >= row_begin + 0.5 && min_y <= row_end - 0.5)) continue;
+    const double min_x = std::min({a.x(), b.x(), c.x()}), max_x = std::max({a.x(), b.x(), c.x()});
+    if (!(max_x >= 0.5 && min_x <= width - 0.5)) continue;
+    const int r0 = std::max(row_begin, int(std::ceil(min_y - 0.5)));
+    const int r1 = std::min(row_end - 1, int(std::floor(max_y - 0.5)));
+    const int c0 = std::max(0, int(std::ceil(min_x - 0.5)));
+    const int c1 = std::min(width - 1, int(std::floor(max_x - 0.5)));
+    const float d0 = ws.vertex_depth[face[0]], d1 = ws.vertex_depth[face[1]],
+                d2 = ws.vertex_depth[face[2]];
+    const Edge e0 = MakeEdge(px, face[1], face[2]);  // weight of vertex 0
+    const Edge e1 = MakeEdge(px, face[2], face[0]);  // of vertex 1
+    const Edge e2 = MakeEdge(px, face[0], face[1]);  // of vertex 2
+    for (int row = r0; row <= r1; ++row) {
+      const double y = row + 0.5;
+      for (int col = c0; col <= c1; ++col) {
+        const double x = col + 0.5;
+        const double w0 = e0(x, y), w1 = e1(x, y), w2 = e2(x, y);
+        const bool inside = (w0 >= 0 && w1 >= 0 && w2 >= 0) || (w0 <= 0 && w1 <= 0 && w2 <= 0);
+        const double sum = w0 + w1 + w2;
+        if (!inside || sum == 0) continue;  // outside, or a degenerate (edge-on) face
+        const float u = float(w1 / sum), v = float(w2 / sum);
+        const float z = d0 + u * (d1 - d0) + v * (d2 - d0);
+        const size_t p = size_t(row) * width + col;
+        if (!(z < depth[p])) continue;
+        depth[p] = z;
+        (*hits)[p] = RayHit{int(f), 0.f, u, v};
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace) {
+  RasterWorkspace& ws = *workspace;
+  HitMap& map = view->hit_map;
+  const int w = view->width(), h = view->height();
+  const size_t n = size_t(w) * h;
+  map.hits.assign(n, RayHit{});
+  map.points.resize(n);
+  map.faces.resize(n);
+  ws.depth.assign(n, std::numeric_limits<float>::infinity());
+  const Eigen::Vector3f along = MeanRayDirection(*view);
+  const size_t nv = mesh.vertices.size();
+  ws.pixels.resize(nv);
+  ws.vertex_depth.resize(nv);
+#pragma omp parallel for schedule(static)
+  for (long v = 0; v < long(nv); ++v) {
+    const Eigen::Vector3f& p = mesh.vertices[v];
+    Eigen::Matrix<double, 2, 3> unused;
+    ws.pixels[v] = p.allFinite() ? view->projection.PixelFromLocal(p.cast<double>(), &unused)
+                                 : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+    ws.vertex_depth[v] = along.dot(p);
+  }
+#pragma omp parallel
+  {
+    // One band of rows per thread; every thread scans all faces (a cheap bounds test).
+    const int threads = omp_get_num_threads(), t = omp_get_thread_num();
+    const int row_begin = int(long(h) * t / threads), row_end = int(long(h) * (t + 1) / threads);
+    RasterizeBand(mesh, ws, w, row_begin, row_end, &map.hits, ws.depth.data());
+  }
+  // The hit point on the face, and its parameter along the pixel's ray.
+#pragma omp parallel for schedule(static)
+  for (long p = 0; p < long(n); ++p) {
+    RayHit& hit = map.hits[p];
+    map.faces[p] = hit.face;
+    if (!hit.hit()) continue;
+    const Eigen::Vector3i& f = mesh.faces[hit.face];
+    const Eigen::Vector3f& p0 = mesh.vertices[f[0]];
+    const Eigen::Vector3f X =
+        p0 + hit.u * (mesh.vertices[f[1]] - p0) + hit.v * (mesh.vertices[f[2]] - p0);
+    const Ray& ray = view->rays[p];
+    hit.t = (X - ray.origin).dot(ray.direction) / ray.direction.squaredNorm();
+    map.points[p] = X;
+  }
+}
+
+}  // namespace satmesh

@@ -1,0 +1,27 @@
+#pragma once
+// Hit maps by z-buffer rasterization: the same answer as casting every pixel's ray
+// (face, barycentrics, point, ray parameter of the first surface along the ray), found
+// by projecting the mesh into the view through the RFM (the level's projection grid) and
+// scanning each triangle's pixels. At the refinement's resolution a triangle covers ~2
+// pixels, over which the RFM is affine to < 1e-6 px, so the pixel-centre tests and the
+// barycentrics are exact to rounding; the depth order is the distance along the view's
+// mean ray (rays of one view are parallel to < 1e-3 rad over a tile).
+#include <vector>
+
+#include "core/mesh/mesh.h"
+#include "core/refine/view_level.h"
+
+namespace satmesh {
+
+// Per-view scratch of the rasterizer, reused across iterations.
+struct RasterWorkspace {
+  std::vector<Eigen::Vector2d> pixels;  // projected vertices (GDAL pixel coordinates)
+  std::vector<float> vertex_depth;      // per vertex, along the view's mean ray
+  std::vector<float> depth;             // z-buffer, per pixel
+};
+
+// Fills view->hit_map (hits, points, faces) for the mesh's current vertices, like
+// CastHitMap. Parallel over row bands with OpenMP.
+void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace);
+
+}  // namespace satmesh

@@ -1,0 +1,106 @@
+#include "core/refine/hit_map_raster.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/image/image.h"
+#include "tests/core/refine/plane_scene.h"
+
+namespace satmesh {
+namespace {
+
+// A tilted plane with a 3 m block (steep walls: occlusion edges in oblique views), made
+// of triangles of `spacing` metres, slightly jittered so no edge is axis-aligned.
+TriangleMesh BlockMesh(double spacing_m) {
+  TriangleMesh mesh = testing::PlaneMesh(testing::Plane{}, 20, spacing_m, 0.0);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> jitter(-0.1f * float(spacing_m), 0.1f * float(spacing_m));
+  for (auto& p : mesh.vertices) {
+    p.x() += jitter(rng), p.y() += jitter(rng);
+    if (std::abs(p.x()) < 5.5f && std::abs(p.y()) < 5.5f) p.z() += 3.f;
+  }
+  return mesh;
+}
+
+struct Agreement {
+  long both = 0, hit_mismatch = 0, same_face = 0, close = 0, close_t = 0;
+};
+
+// Rasterized vs ray-cast hit maps of one view (0.5 m GSD, oblique by off_nadir_deg).
+Agreement CompareWithRaycast(const TriangleMesh& mesh, double off_nadir_deg) {
+  const RefineInput input =
+      testing::MakePlaneInput(testing::Plane{}, {{off_nadir_deg, 40}}, mesh, 120, 0.5);
+  auto make_view = [&] {
+    return MakeViewLevel(0, 0, NormalizeRadiometry(input.views[0].image), input.views[0].rpc,
+                         input.frame, Eigen::Vector3d(-30, -30, -15), Eigen::Vector3d(30, 30, 20), 8);
+  };
+  ViewLevel cast = make_view(), raster = make_view();
+  RayScene scene(mesh);
+  CastHitMap(scene, &cast);
+  RasterWorkspace workspace;
+  RasterizeHitMap(mesh, &raster, &workspace);
+
+  Agreement a;
+  for (size_t p = 0; p < cast.hit_map.hits.size(); ++p) {
+    const RayHit &c = cast.hit_map.hits[p], &r = raster.hit_map.hits[p];
+    EXPECT_EQ(raster.hit_map.faces[p], r.face);
+    if (c.hit() != r.hit()) ++a.hit_mismatch;
+    if (!c.hit() || !r.hit()) continue;
+    ++a.both;
+    a.same_face += c.face == r.face;
+    a.close += (cast.hit_map.points[p] - raster.hit_map.points[p]).norm() < 0.005f;
+    a.close_t += std::abs(c.t - r.t) * cast.rays[p].direction.norm() < 0.005f;
+  }
+  std::printf("both hit %ld, hit mismatch %ld, same face %.5f, points within 5 mm %.5f\n", a.both,
+              a.hit_mismatch, double(a.same_face) / a.both, double(a.close) / a.both);
+  return a;
+}
+
+TEST(RasterizeHitMap, AgreesWithEmbreeRayCastingAtTwoPixelsATriangle) {
+  const Agreement a = CompareWithRaycast(BlockMesh(1.0), 25);
+  ASSERT_GT(a.both, 5000);
+  EXPECT_LT(double(a.hit_mismatch) / a.both, 0.001);  // only pixel centres on an edge
+  EXPECT_GT(double(a.same_face) / a.both, 0.998);
+  EXPECT_GT(double(a.close) / a.both, 0.998);        // the same point (walls' edges aside)
+  EXPECT_GT(double(a.close_t) / a.both, 0.998);      // and the same ray parameter
+}
+
+TEST(RasterizeHitMap, AgreesWithEmbreeOnLargeTrianglesAndSteepViews) {
+  const Agreement a = CompareWithRaycast(BlockMesh(4.0), 35);
+  ASSERT_GT(a.both, 5000);
+  EXPECT_LT(double(a.hit_mismatch) / a.both, 0.001);
+  EXPECT_GT(double(a.same_face) / a.both, 0.998);
+  EXPECT_GT(double(a.close) / a.both, 0.998);
+}
+
+TEST(RasterizeHitMap, SkipsFacesWithNonFiniteVertices) {
+  const TriangleMesh clean = BlockMesh(1.0);
+  TriangleMesh broken = clean;
+  for (int k = 0; k < 50; ++k) broken.vertices[k * 7].x() = std::numeric_limits<float>::quiet_NaN();
+  const RefineInput input = testing::MakePlaneInput(testing::Plane{}, {{20, 0}}, clean, 120, 0.5);
+  auto count_hits = [&](const TriangleMesh& mesh) {
+    ViewLevel view = MakeViewLevel(0, 0, NormalizeRadiometry(input.views[0].image),
+                                   input.views[0].rpc, input.frame, Eigen::Vector3d(-30, -30, -15),
+                                   Eigen::Vector3d(30, 30, 20), 8);
+    RasterWorkspace workspace;
+    RasterizeHitMap(mesh, &view, &workspace);
+    long hits = 0;
+    for (size_t p = 0; p < view.hit_map.hits.size(); ++p) {
+      const RayHit& hit = view.hit_map.hits[p];
+      if (!hit.hit()) continue;
+      ++hits;
+      for (int k = 0; k < 3; ++k) EXPECT_TRUE(mesh.vertices[mesh.faces[hit.face][k]].allFinite());
+      EXPECT_TRUE(view.hit_map.points[p].allFinite());
+    }
+    return hits;
+  };
+  const long clean_hits = count_hits(clean), broken_hits = count_hits(broken);
+  std::printf("hits: clean mesh %ld, with 50 NaN vertices %ld\n", clean_hits, broken_hits);
+  EXPECT_GT(clean_hits, 5000);
+  EXPECT_LT(broken_hits, clean_hits);             // the NaN vertices' faces are gone
+  EXPECT_GT(broken_hits, 0.9 * clean_hits);       // and nothing else
+}
+
+}  // namespace
+}  // namespace satmesh
