@@ -22,13 +22,14 @@ struct ZnccField {
 };
 
 // Scratch rows, reused across calls (the computation streams over rows: its working set
-// is 2 x (2r+1) rows of window sums, so it stays in cache for any image size).
+// is two rings of 2r+2 rows and a few rows of sums, so it stays in cache for any image
+// size).
 struct ZnccWorkspace {
-  std::vector<float> product_rows, coefficient_rows, scratch;
+  std::vector<float> centred_ring, coefficient_ring, columns, rows, zeros;
 };
 
 // a, b: reference and warped images (width*height, row-major); valid: 1 where both exist.
-// Only pixels where valid is 1 are read from a and b.
+// a and b are read everywhere, but their values where valid is 0 do not matter.
 ZnccField ComputeZnccField(const std::vector<float>& a, const std::vector<float>& b,
                            const std::vector<uint8_t>& valid, int width, int height,
                            const ZnccOptions& options, ZnccWorkspace* workspace = nullptr);
