@@ -15,6 +15,7 @@
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
 #include "core/raycast/ray_scene.h"
+#include "core/refine/hit_map_raster.h"
 #include "core/refine/view_level.h"
 #include "proto/job_spec_json.h"
 
@@ -116,6 +117,21 @@ RaycastTiming TimeRaycast(const RefineInput& input, const TriangleMesh& mesh,
     timing.num_rays += long(v.rays.size());
     for (const auto& h : v.hit_map.hits) hit += h.hit();
   }
+  // The rasterized hit maps of the same views, and how often they agree with Embree's.
+  std::vector<std::vector<int>> embree_faces;
+  for (const auto& v : levels) embree_faces.push_back(v.hit_map.faces);
+  RasterWorkspace raster;
+  timing.raster_s = 1e300;
+  for (int r = 0; r < std::max(1, repeats); ++r) {
+    t0 = Clock::now();
+    for (auto& v : levels) RasterizeHitMap(mesh, &v, &raster);
+    timing.raster_s = std::min(timing.raster_s, Seconds(t0));
+  }
+  long same = 0;
+  for (size_t k = 0; k < levels.size(); ++k)
+    for (size_t p = 0; p < embree_faces[k].size(); ++p)
+      same += embree_faces[k][p] == levels[k].hit_map.faces[p];
+  timing.raster_agreement = timing.num_rays > 0 ? double(same) / timing.num_rays : 0;
   timing.hit_fraction = timing.num_rays > 0 ? double(hit) / timing.num_rays : 0;
   return timing;
 }

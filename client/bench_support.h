@@ -32,6 +32,8 @@ struct RaycastTiming {
   double build_s = 0;        // RayScene construction (BVH build)
   double intersect_s = 0;    // RayScene::Intersect over all rays (best of the repeats)
   double hit_map_s = 0;      // CastHitMap for all views (Intersect + hit points; best)
+  double raster_s = 0;       // RasterizeHitMap for all views (the same hit maps; best)
+  double raster_agreement = 0;  // fraction of pixels where both give the same face (or miss)
   double hit_fraction = 0;   // fraction of rays that hit
 };
 RaycastTiming TimeRaycast(const RefineInput& input, const TriangleMesh& mesh,

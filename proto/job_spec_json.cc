@@ -69,7 +69,6 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "min_ray_cos") r->min_ray_cos = Number(v, path);
     else if (key == "virtual_camera_grid_px") r->virtual_camera_grid_px = Integer(v, path);
     else if (key == "rasterize_hit_maps") r->rasterize_hit_maps = Boolean(v, path);
-    else if (key == "full_raycast_every") r->full_raycast_every = Integer(v, path);
     else if (key == "coarse_edge_px") r->coarse_edge_px = Number(v, path);
     else if (key == "remesh_coarse") r->remesh_coarse = Boolean(v, path);
     else if (key == "normalize_by_pair_count") r->normalize_by_pair_count = Boolean(v, path);

@@ -148,16 +148,8 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
     auto t0 = Clock::now();
     if (opt.rasterize_hit_maps) {
       for (auto& v : views) RasterizeHitMap(*mesh, &v, &raster);
-    } else if (it % opt.full_raycast_every == 0) {
-      for (auto& v : views) stats.times.intersect_s += CastHitMap(*scene, &v);
     } else {
-      for (auto& v : views) {
-        const HitMapUpdate u = UpdateHitMap(*scene, *mesh, /*edge_tolerance=*/0.02f,
-                                            /*depth_jump_m=*/float(3 * gsd), &v);
-        stats.times.intersect_s += u.intersect_s;
-        stats.recast_fraction += double(u.recast) / std::max(1L, u.kept + u.recast);
-        ++stats.num_hit_map_updates;
-      }
+      for (auto& v : views) stats.times.intersect_s += CastHitMap(*scene, &v);
     }
     stats.times.raycast_s += Seconds(t0);
 
@@ -199,10 +191,6 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
   spdlog::info("level {}: {} vertices, {} faces, GSD {:.2f} m, mean ZNCC {:.4f} -> {:.4f} ({:.1f} s)",
                level, stats.num_vertices, stats.num_faces, gsd, stats.mean_zncc.front(),
                stats.mean_zncc.back(), stats.level_s);
-  if (stats.num_hit_map_updates > 0)
-    spdlog::info("level {}: hit maps followed their faces {} times, {:.1f}% of the hit pixels traced again",
-                 level, stats.num_hit_map_updates,
-                 100 * stats.recast_fraction / stats.num_hit_map_updates);
   return stats;
 }
 

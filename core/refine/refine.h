@@ -40,8 +40,6 @@ struct LevelStats {
   std::vector<double> mean_zncc;       // before each iteration, and after the last
   StageTimes times;
   double level_s = 0;
-  double recast_fraction = 0;   // summed over hit-map updates: pixels traced again / hit
-  int num_hit_map_updates = 0;  // view hit maps updated without a full raycast
 };
 
 struct RefineResult {

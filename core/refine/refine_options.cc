@@ -37,8 +37,6 @@ std::string RefineOptions::Check() const {
     return "min_ray_cos must be in [0, 1), got " + Num(min_ray_cos);
   if (virtual_camera_grid_px < 1)
     return "virtual_camera_grid_px must be >= 1, got " + Num(virtual_camera_grid_px);
-  if (full_raycast_every < 1 || full_raycast_every > 100)
-    return "full_raycast_every must be in [1, 100], got " + Num(full_raycast_every);
   if (!(coarse_edge_px > 0)) return "coarse_edge_px must be > 0, got " + Num(coarse_edge_px);
   return pairs.Check();
 }

@@ -30,8 +30,6 @@ struct RefineOptions {
   int virtual_camera_grid_px = 16; // spacing of exactly localised rays, in level pixels, >= 1
   bool rasterize_hit_maps = true;  // hit maps by z-buffer rasterization through the RFM
                                    // (hit_map_raster.h); false: Embree ray casting
-  int full_raycast_every = 1;      // trace every ray every N iterations; in between, hit maps
-                                   // follow their faces (UpdateHitMap), [1, 100]; 1 = always
   double coarse_edge_px = 2.0;     // edge length of the coarse mesh at level L, in level px, > 0
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
   bool normalize_by_pair_count = true;  // divide each vertex's photometric gradient by the

@@ -55,18 +55,4 @@ double CastHitMap(const RayScene& scene, ViewLevel* view);
 // pixel per iteration instead of one per pair-direction).
 void SetRayCosines(const std::vector<Eigen::Vector3f>& face_normals, ViewLevel* view);
 
-struct HitMapUpdate {
-  long kept = 0, recast = 0;  // pixels re-intersected with their own face / traced again
-  double intersect_s = 0;     // Embree time for the recast pixels
-};
-
-// Brings a hit map up to date after small vertex moves without tracing every ray: each
-// hit pixel re-intersects its ray with the moved plane of its own face, and is traced
-// again (Embree) when the new hit leaves the face (beyond `edge_tolerance` in
-// barycentric units) or when the pixel sits at a depth discontinuity of the old map
-// (|t - t_neighbour| > depth_jump_m: where occlusion can change). Misses stay misses.
-// Call CastHitMap every few iterations to bound what this approximation can miss.
-HitMapUpdate UpdateHitMap(const RayScene& scene, const TriangleMesh& mesh, float edge_tolerance,
-                          float depth_jump_m, ViewLevel* view);
-
 }  // namespace satmesh
