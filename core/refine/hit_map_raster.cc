@@ -26,6 +26,11 @@ inline Edge MakeEdge(const Eigen::Vector2d* pixels, int s, int t) {
   return swap ? Edge{-A, -B, -C} : Edge{A, B, C};
 }
 
+// floor and ceil of finite values in int range, without libm calls (no SSE4.1 in the
+// portable build).
+inline int FloorInt(double a) { const int i = int(a); return i - (a < i); }
+inline int CeilInt(double a) { const int i = int(a); return i + (a > i); }
+
 // The view's mean ray direction (unit), from the central pixel's ray.
 Eigen::Vector3f MeanRayDirection(const ViewLevel& view) {
   const size_t centre = size_t(view.height() / 2) * view.width() + view.width() / 2;
@@ -45,10 +50,10 @@ void RasterizeBand(const TriangleMesh& mesh, const RasterWorkspace& ws, int widt
     if (!(max_y >= row_begin + 0.5 && min_y <= row_end - 0.5)) continue;
     const double min_x = std::min({a.x(), b.x(), c.x()}), max_x = std::max({a.x(), b.x(), c.x()});
     if (!(max_x >= 0.5 && min_x <= width - 0.5)) continue;
-    const int r0 = std::max(row_begin, int(std::ceil(min_y - 0.5)));
-    const int r1 = std::min(row_end - 1, int(std::floor(max_y - 0.5)));
-    const int c0 = std::max(0, int(std::ceil(min_x - 0.5)));
-    const int c1 = std::min(width - 1, int(std::floor(max_x - 0.5)));
+    const int r0 = std::max(row_begin, CeilInt(std::max(min_y, -1.0) - 0.5));
+    const int r1 = std::min(row_end - 1, FloorInt(std::min(max_y, double(row_end)) - 0.5));
+    const int c0 = std::max(0, CeilInt(std::max(min_x, -1.0) - 0.5));
+    const int c1 = std::min(width - 1, FloorInt(std::min(max_x, double(width)) - 0.5));
     const float d0 = ws.vertex_depth[face[0]], d1 = ws.vertex_depth[face[1]],
                 d2 = ws.vertex_depth[face[2]];
     const Edge e0 = MakeEdge(px, face[1], face[2]);  // weight of vertex 0
@@ -59,7 +64,7 @@ void RasterizeBand(const TriangleMesh& mesh, const RasterWorkspace& ws, int widt
       for (int col = c0; col <= c1; ++col) {
         const double x = col + 0.5;
         const double w0 = e0(x, y), w1 = e1(x, y), w2 = e2(x, y);
-        const bool inside = (w0 >= 0 && w1 >= 0 && w2 >= 0) || (w0 <= 0 && w1 <= 0 && w2 <= 0);
+        const bool inside = ((w0 >= 0) & (w1 >= 0) & (w2 >= 0)) | ((w0 <= 0) & (w1 <= 0) & (w2 <= 0));
         const double sum = w0 + w1 + w2;
         if (!inside || sum == 0) continue;  // outside, or a degenerate (edge-on) face
         const float u = float(w1 / sum), v = float(w2 / sum);
