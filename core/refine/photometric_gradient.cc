@@ -6,70 +6,95 @@
 namespace satmesh {
 namespace {
 
-// Bilinear sample of an image at GDAL pixel coordinates (x, y) known to lie at least
-// half a pixel inside the image, with the exact derivatives of the interpolant.
-inline void SampleInside(const ImageF& image, double x, double y, float* value, float* d_dx,
-                         float* d_dy) {
-  const double u = x - 0.5, v = y - 0.5;  // centre-origin coordinates
-  const int i = int(u), j = int(v);
-  const float fx = float(u - i), fy = float(v - j);
-  const float* p = &image.pixels[size_t(j) * image.width + i];
-  const float p00 = p[0], p10 = p[1], p01 = p[image.width], p11 = p[image.width + 1];
-  const float top = p00 + fx * (p10 - p00), bottom = p01 + fx * (p11 - p01);
-  *value = top + fy * (bottom - top);
-  *d_dx = (p10 - p00) + fy * ((p11 - p01) - (p10 - p00));
-  *d_dy = bottom - top;
+// Wider SIMD and scalar instructions (VEX, roundsd for the projection's floors) in a
+// portable binary: an AVX2 copy of the warp, picked at load time where the CPU has it.
+#if defined(__x86_64__) && defined(__GNUC__)
+#define SATMESH_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#else
+#define SATMESH_AVX2_CLONE
+#endif
+
+// What one pair-direction's warp reads and writes, as plain pointers.
+struct WarpContext {
+  const ViewLevel* vi;
+  const ViewLevel* vj;
+  const RayHit* hits_i;
+  const float* cos_i;  // null: computed from the face normals
+  const std::vector<Eigen::Vector3f>* face_normals;
+  const int* faces_j;
+  const Eigen::Vector3f* points_j;
+  float tol2, min_cos;
+  PairWorkspace* out;
+};
+
+// Projects one row of view i's hit points into j, tests visibility, samples j. Per
+// pixel: a, b, valid, and db_dn = ∂b per unit move of the face along its normal.
+SATMESH_AVX2_CLONE
+void WarpRow(const WarpContext& c, int row) {
+  const ViewLevel& vi = *c.vi;
+  const ViewLevel& vj = *c.vj;
+  const int w = vi.width(), wj = vj.width();
+  const double max_x = vj.width() - 1.0, max_y = vj.height() - 1.0;
+  const float* image_j = vj.image.pixels.data();
+  PairWorkspace& out = *c.out;
+  for (int col = 0; col < w; ++col) {
+    const size_t p = size_t(row) * w + col;
+    const int face = c.hits_i[p].face;
+    if (face < 0) continue;
+    const Eigen::Vector3f& ray_dir = vi.rays[p].direction;
+    const float cos_ray = c.cos_i ? c.cos_i[p] : ray_dir.dot((*c.face_normals)[face]);
+    if (cos_ray > -c.min_cos) continue;  // grazing or back-facing
+    const Eigen::Vector3f& X = vi.hit_map.points[p];
+    Eigen::Matrix<double, 2, 3> pixel_from_local;
+    const Eigen::Vector2d xj = vj.projection.PixelFromLocal(X.cast<double>(), &pixel_from_local);
+    if (!(xj.x() >= 1.0 && xj.y() >= 1.0 && xj.x() < max_x && xj.y() < max_y)) continue;
+    // Visibility in j: j's own ray through that pixel must hit the same surface point
+    // (the same face needs no point read).
+    const size_t q = size_t(int(xj.y())) * wj + int(xj.x());
+    const int face_j = c.faces_j[q];
+    if (face_j != face && (face_j < 0 || (c.points_j[q] - X).squaredNorm() > c.tol2)) continue;
+    // Bilinear sample of j (centre-origin coordinates, at least half a pixel inside)
+    // with the exact derivatives of the interpolant.
+    const double u = xj.x() - 0.5, v = xj.y() - 0.5;
+    const int iu = int(u), iv = int(v);
+    const float fx = float(u - iu), fy = float(v - iv);
+    const float* s = image_j + size_t(iv) * wj + iu;
+    const float p00 = s[0], p10 = s[1], p01 = s[wj], p11 = s[wj + 1];
+    const float top = p00 + fx * (p10 - p00), bottom = p01 + fx * (p11 - p01);
+    const float db_dx = (p10 - p00) + fy * ((p11 - p01) - (p10 - p00)), db_dy = bottom - top;
+    // DΠ_j in the local frame (the projection holds the chain rule through the frame),
+    // along the ray: dx_j/dt.
+    const Eigen::Vector2d dx_dt = pixel_from_local * ray_dir.cast<double>();
+    const float db_dt = db_dx * float(dx_dt.x()) + db_dy * float(dx_dt.y());
+    out.a[p] = vi.image.pixels[p];
+    out.b[p] = top + fy * (bottom - top);
+    out.db_dn[p] = db_dt / cos_ray;
+    out.valid[p] = 1;
+  }
 }
 
-// Projects view i's hit points into j, tests visibility, samples j. Per pixel: a, b,
-// valid, and db_dn = ∂b per unit move of the face along its normal.
 void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
                   const std::vector<Eigen::Vector3f>& face_normals,
                   const PhotometricOptions& options, PairWorkspace* ws) {
   const int w = vi.width(), h = vi.height();
   const size_t n = size_t(w) * h;
-  PairWorkspace& warp = *ws;
-  warp.a.resize(n);  // read only where valid
-  warp.b.resize(n);
-  warp.db_dn.resize(n);
-  warp.valid.assign(n, 0);
-  const float tol2 = float(options.visibility_tolerance_m * options.visibility_tolerance_m);
-  const float min_cos = float(options.min_ray_cos);
-  const int wj = vj.width(), hj = vj.height();
-  const RayHit* hits_i = vi.hit_map.hits.data();
-  const int* faces_j = vj.hit_map.faces.data();
-  const bool have_cos = vi.hit_map.ray_cos.size() == n;  // else computed here
-
+  ws->a.resize(n);  // meaningful only where valid
+  ws->b.resize(n);
+  ws->db_dn.resize(n);
+  ws->valid.assign(n, 0);
+  const bool have_cos = vi.hit_map.ray_cos.size() == n;
+  const WarpContext context{&vi,
+                            &vj,
+                            vi.hit_map.hits.data(),
+                            have_cos ? vi.hit_map.ray_cos.data() : nullptr,
+                            &face_normals,
+                            vj.hit_map.faces.data(),
+                            vj.hit_map.points.data(),
+                            float(options.visibility_tolerance_m * options.visibility_tolerance_m),
+                            float(options.min_ray_cos),
+                            ws};
 #pragma omp parallel for schedule(dynamic, 8)
-  for (int row = 0; row < h; ++row) {
-    for (int col = 0; col < w; ++col) {
-      const size_t p = size_t(row) * w + col;
-      const RayHit& hit = hits_i[p];
-      if (!hit.hit()) continue;
-      const Eigen::Vector3f& ray_dir = vi.rays[p].direction;
-      const float cos_ray =
-          have_cos ? vi.hit_map.ray_cos[p] : ray_dir.dot(face_normals[hit.face]);
-      if (cos_ray > -min_cos) continue;  // grazing or back-facing
-      const Eigen::Vector3f& X = vi.hit_map.points[p];
-      Eigen::Matrix<double, 2, 3> pixel_from_local;
-      const Eigen::Vector2d xj = vj.projection.PixelFromLocal(X.cast<double>(), &pixel_from_local);
-      if (!(xj.x() >= 1.0 && xj.y() >= 1.0 && xj.x() < wj - 1.0 && xj.y() < hj - 1.0)) continue;
-      // Visibility in j: j's own ray through that pixel must hit the same surface point.
-      const size_t q = size_t(int(xj.y())) * wj + int(xj.x());
-      const int face_j = faces_j[q];
-      if (face_j < 0) continue;
-      if (face_j != hit.face && (vj.hit_map.points[q] - X).squaredNorm() > tol2) continue;
-      float b, db_dx, db_dy;
-      SampleInside(vj.image, xj.x(), xj.y(), &b, &db_dx, &db_dy);
-      // DΠ_j in the local frame (the projection holds the chain rule through the frame).
-      const Eigen::Vector2d dx_dt = pixel_from_local * ray_dir.cast<double>();
-      const double db_dt = db_dx * dx_dt.x() + db_dy * dx_dt.y();
-      warp.a[p] = vi.image.pixels[p];
-      warp.b[p] = b;
-      warp.db_dn[p] = float(db_dt / cos_ray);
-      warp.valid[p] = 1;
-    }
-  }
+  for (int row = 0; row < h; ++row) WarpRow(context, row);
 }
 
 }  // namespace
