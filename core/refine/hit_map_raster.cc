@@ -59,15 +59,17 @@ void RasterizeBand(const TriangleMesh& mesh, const RasterWorkspace& ws, int widt
     const Edge e0 = MakeEdge(px, face[1], face[2]);  // weight of vertex 0
     const Edge e1 = MakeEdge(px, face[2], face[0]);  // of vertex 1
     const Edge e2 = MakeEdge(px, face[0], face[1]);  // of vertex 2
+    // Twice the signed area; the weights w_k share its sign inside the triangle.
+    const double area = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+    if (area == 0) continue;  // edge-on
+    const double sign = area > 0 ? 1.0 : -1.0, inv_area = 1.0 / area;
     for (int row = r0; row <= r1; ++row) {
       const double y = row + 0.5;
       for (int col = c0; col <= c1; ++col) {
         const double x = col + 0.5;
         const double w0 = e0(x, y), w1 = e1(x, y), w2 = e2(x, y);
-        const bool inside = ((w0 >= 0) & (w1 >= 0) & (w2 >= 0)) | ((w0 <= 0) & (w1 <= 0) & (w2 <= 0));
-        const double sum = w0 + w1 + w2;
-        if (!inside || sum == 0) continue;  // outside, or a degenerate (edge-on) face
-        const float u = float(w1 / sum), v = float(w2 / sum);
+        if (!((sign * w0 >= 0) & (sign * w1 >= 0) & (sign * w2 >= 0))) continue;
+        const float u = float(w1 * inv_area), v = float(w2 * inv_area);
         const float z = d0 + u * (d1 - d0) + v * (d2 - d0);
         const size_t p = size_t(row) * width + col;
         if (!(z < depth[p])) continue;
