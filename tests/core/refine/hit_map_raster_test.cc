@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "core/image/image.h"
@@ -72,6 +73,53 @@ TEST(RasterizeHitMap, AgreesWithEmbreeOnLargeTrianglesAndSteepViews) {
   EXPECT_LT(double(a.hit_mismatch) / a.both, 0.001);
   EXPECT_GT(double(a.same_face) / a.both, 0.998);
   EXPECT_GT(double(a.close) / a.both, 0.998);
+}
+
+// Under a curved RFM the rasterized hit points are the RFM's own answer: each reprojects
+// (exact RPC) onto its pixel centre, closer than the virtual camera's straight rays that
+// Embree traces (their approximation error has its own test in virtual_camera_test).
+TEST(RasterizeHitMap, HitPointsReprojectOntoTheirPixelsUnderACubicRfm) {
+  const TriangleMesh mesh = BlockMesh(1.0);
+  const LocalFrame frame(Eigen::Vector3d(5.44, 43.26, 100.0));
+  const RpcModel rpc = testing::CurvedRpc(frame, {25, 40}, 0.5, 160);
+  const RpcModel affine = testing::AffineRpc(frame, {25, 40}, 0.5, 160);
+  const Eigen::Vector3d corner = frame.GeoFromLocal(Eigen::Vector3d(35, 35, 10));
+  const double curvature_px = (rpc.PixelFromGeo(corner) - affine.PixelFromGeo(corner)).norm();
+  EXPECT_GT(curvature_px, 0.05);  // the cubic and denominator terms matter
+  auto make_view = [&] {
+    return MakeViewLevel(0, 0, ImageF(160, 160), rpc, frame, Eigen::Vector3d(-30, -30, -15),
+                         Eigen::Vector3d(30, 30, 20), 8);
+  };
+  ViewLevel cast = make_view(), raster = make_view();
+  RayScene scene(mesh);
+  CastHitMap(scene, &cast);
+  RasterWorkspace workspace;
+  RasterizeHitMap(mesh, &raster, &workspace);
+  std::vector<double> err_cast, err_raster;
+  long both = 0, same_face = 0;
+  for (size_t p = 0; p < cast.hit_map.hits.size(); ++p) {
+    if (!cast.hit_map.hits[p].hit() || !raster.hit_map.hits[p].hit()) continue;
+    ++both;
+    same_face += cast.hit_map.faces[p] == raster.hit_map.faces[p];
+    const Eigen::Vector2d centre(p % 160 + 0.5, p / 160 + 0.5);
+    auto error = [&](const Eigen::Vector3f& X) {
+      return (rpc.PixelFromGeo(frame.GeoFromLocal(X.cast<double>())) - centre).norm();
+    };
+    err_cast.push_back(error(cast.hit_map.points[p]));
+    err_raster.push_back(error(raster.hit_map.points[p]));
+  }
+  std::sort(err_cast.begin(), err_cast.end());
+  std::sort(err_raster.begin(), err_raster.end());
+  const double median_cast = err_cast[err_cast.size() / 2], median_raster = err_raster[err_raster.size() / 2];
+  std::printf("curvature %.3f px; reprojection error median / max: raster %.4f / %.4f px, "
+              "ray casting %.4f / %.4f px; same face %.4f of %ld\n",
+              curvature_px, median_raster, err_raster.back(), median_cast, err_cast.back(),
+              double(same_face) / both, both);
+  ASSERT_GT(both, 5000);
+  EXPECT_LT(median_raster, 0.005);
+  EXPECT_LT(err_raster.back(), 0.02);
+  EXPECT_LT(median_raster, median_cast);
+  EXPECT_GT(double(same_face) / both, 0.9);  // the rest: the rays' error moves them a face over
 }
 
 TEST(RasterizeHitMap, SkipsFacesWithNonFiniteVertices) {

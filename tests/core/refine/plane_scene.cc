@@ -18,7 +18,9 @@ double PlaneTexture(double x, double y, double z) {
   return 0.5 + v / 12.0;
 }
 
-RpcModel AffineRpc(const LocalFrame& frame, const ViewSpec& view, double gsd_m, int size_px) {
+namespace {
+RpcCoefficients AffineRpcCoefficients(const LocalFrame& frame, const ViewSpec& view,
+                                      double gsd_m, int size_px) {
   RpcCoefficients c;
   const Eigen::Vector3d center = frame.center_lon_lat_h();
   c.long_off = center.x();
@@ -38,6 +40,21 @@ RpcModel AffineRpc(const LocalFrame& frame, const ViewSpec& view, double gsd_m, 
   c.line_num[2] = -sy / gsd_m / c.line_scale;
   c.line_num[3] = c.height_scale * t * std::cos(phi) / gsd_m / c.line_scale;
   c.samp_den[0] = c.line_den[0] = 1;
+  return c;
+}
+}  // namespace
+
+RpcModel AffineRpc(const LocalFrame& frame, const ViewSpec& view, double gsd_m, int size_px) {
+  return RpcModel::FromCoefficients(AffineRpcCoefficients(frame, view, gsd_m, size_px));
+}
+
+RpcModel CurvedRpc(const LocalFrame& frame, const ViewSpec& view, double gsd_m, int size_px) {
+  RpcCoefficients c = AffineRpcCoefficients(frame, view, gsd_m, size_px);
+  for (int k = 4; k < 20; ++k) {
+    c.samp_num[k] = 1e-2 * std::sin(k), c.line_num[k] = 1e-2 * std::cos(k);
+    c.samp_den[k] = 3e-3 * std::cos(3 * k), c.line_den[k] = 3e-3 * std::sin(3 * k);
+  }
+  c.samp_den[1] = 2e-3, c.line_den[2] = -2e-3;
   return RpcModel::FromCoefficients(c);
 }
 

@@ -21,6 +21,9 @@ double PlaneTexture(double x, double y, double z);
 
 // An affine RPC looking at the frame centre: col = cx + (x - z tanθ sinφ)/gsd, row likewise.
 RpcModel AffineRpc(const LocalFrame& frame, const ViewSpec& view, double gsd_m, int size_px);
+// The same with every cubic and denominator term of the RFM set (a few pixels of curvature
+// over the image: a real RFM, not an affine one).
+RpcModel CurvedRpc(const LocalFrame& frame, const ViewSpec& view, double gsd_m, int size_px);
 
 // Renders the plane as seen by the RPC (3x3 supersampling) into a size x size image in
 // "digital numbers" (texture * 1500 + 200).
