@@ -14,6 +14,8 @@
 #include "client/command.h"
 #include "client/refine_runner.h"
 #include "core/synth/scene_writer.h"
+#include "core/tiling/tile_input.h"
+#include "core/tiling/tile_plan.h"
 
 namespace satmesh::cli {
 namespace {
@@ -110,7 +112,10 @@ int RunBench(const std::vector<std::string>& argv) {
 
   // Embree alone on the final mesh with the rays of one level-0 iteration.
   const JobSpec spec = ReadJobWithOverrides(job, overrides);
-  const TileInput input = PrepareJobInput(spec);
+  // The rays of the run's own windows: the one tile's when the job is one tile (an AOI).
+  const JobPlan plan = PlanJob(spec);
+  const TileInput input =
+      plan.tiles.size() == 1 ? PrepareTileInput(spec, plan, 0) : PrepareJobInput(spec);
   std::set<int> used;
   for (const auto& [i, j] : refine.pairs) used.insert(i), used.insert(j);
   const RaycastTiming ray = TimeRaycast(input.refine, refine.mesh, {used.begin(), used.end()},
