@@ -28,7 +28,7 @@ struct WarpContext {
 };
 
 // Projects one row of view i's hit points into j, tests visibility, samples j. Per
-// pixel: a, b, valid, and db_dn = ∂b per unit move of the face along its normal.
+// pixel: b, valid, and db_dn = ∂b per unit move of the face along its normal.
 SATMESH_AVX2_CLONE
 void WarpRow(const WarpContext& c, int row) {
   const ViewLevel& vi = *c.vi;
@@ -66,7 +66,6 @@ void WarpRow(const WarpContext& c, int row) {
     // along the ray: dx_j/dt.
     const Eigen::Vector2d dx_dt = pixel_from_local * ray_dir.cast<double>();
     const float db_dt = db_dx * float(dx_dt.x()) + db_dy * float(dx_dt.y());
-    out.a[p] = vi.image.pixels[p];
     out.b[p] = top + fy * (bottom - top);
     out.db_dn[p] = db_dt / cos_ray;
     out.valid[p] = 1;
@@ -78,8 +77,7 @@ void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
                   const PhotometricOptions& options, PairWorkspace* ws) {
   const int w = vi.width(), h = vi.height();
   const size_t n = size_t(w) * h;
-  ws->a.resize(n);  // meaningful only where valid
-  ws->b.resize(n);
+  ws->b.resize(n);  // meaningful only where valid
   ws->db_dn.resize(n);
   ws->valid.assign(n, 0);
   const bool have_cos = vi.hit_map.ray_cos.size() == n;
@@ -100,8 +98,7 @@ void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
 }  // namespace
 
 void GradientAccumulator::Reset(size_t num_faces, size_t num_vertices) {
-  face_weights_.assign(num_faces, Eigen::Vector3f::Zero());
-  face_stamp_.assign(num_faces, 0);
+  faces_.assign(num_faces, FaceSlot());
   vertex_stamp_.assign(num_vertices, 0);
   seen_.assign(num_vertices, 0);
   direction_ = 0;
@@ -113,10 +110,10 @@ void GradientAccumulator::AddTo(const TriangleMesh& mesh,
                                 std::vector<int>* seen) const {
   if (vertex_gradient) {
     for (size_t f = 0; f < mesh.faces.size(); ++f) {
-      if (face_stamp_[f] == 0) continue;  // no pixel
+      if (faces_[f].stamp == 0) continue;  // no pixel
       const Eigen::Vector3d normal = face_normals[f].cast<double>();
       const Eigen::Vector3i& face = mesh.faces[f];
-      for (int k = 0; k < 3; ++k) (*vertex_gradient)[face[k]] += double(face_weights_[f][k]) * normal;
+      for (int k = 0; k < 3; ++k) (*vertex_gradient)[face[k]] += double(faces_[f].weights[k]) * normal;
     }
   }
   if (seen)
@@ -131,8 +128,9 @@ PairEnergy AccumulatePairGradient(const ViewLevel& view_i, const ViewLevel& view
   PairWorkspace local;
   PairWorkspace& warp = workspace ? *workspace : local;
   WarpIntoView(view_i, view_j, face_normals, options, &warp);
-  const ZnccField field = ComputeZnccField(warp.a, warp.b, warp.valid, view_i.width(),
-                                           view_i.height(), options.zncc, &warp.zncc);
+  ComputeZnccFieldInto(view_i.image.pixels, warp.b, warp.valid, view_i.width(), view_i.height(),
+                       options.zncc, &warp.field, &warp.zncc);
+  const ZnccField& field = warp.field;
   PairEnergy energy;
   energy.sum_zncc = field.sum_zncc;
   energy.num_windows = field.num_windows;

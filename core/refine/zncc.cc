@@ -22,7 +22,7 @@ constexpr int kResumRows = 32;
 inline float Select(bool condition, float v) {
   return std::bit_cast<float>(std::bit_cast<uint32_t>(v) & -uint32_t(condition));
 }
-inline float ClampNonNegative(float v) { return Select(!(v < 0.f), v); }  // max(0, v)
+inline float ClampNonNegative(float v) { return Select(!(v < 0.f), v); }   // max(0, v)
 inline float AtLeastOne(float v) { return v + Select(v < 1.f, 1.f - v); }  // max(1, v)
 
 // Wider SIMD for the row loops in a portable binary: an AVX2 copy, picked at load time
@@ -80,8 +80,8 @@ void SqrtRow(float* v, int n) {
 // cols + c*stride, with r zeros on both sides). The radius is a template argument for
 // the usual windows, so each sum stays in a register.
 template <int R>
-SATMESH_SIMD_CLONES void BoxSumRowsFixed(const float* cols, int channels, size_t stride,
-                                         int width, float* out, size_t out_stride) {
+SATMESH_SIMD_CLONES void BoxSumRowsFixed(const float* cols, int channels, size_t stride, int width,
+                                         float* out, size_t out_stride) {
   for (int c = 0; c < channels; ++c) {
     const float* __restrict in = cols + c * stride - R;
     float* __restrict o = out + c * out_stride;
@@ -108,11 +108,16 @@ void BoxSumRowsAnyRadius(const float* cols, int channels, size_t stride, int wid
 void BoxSumRows(const float* cols, int channels, size_t stride, int width, int r, float* out,
                 size_t out_stride) {
   switch (r) {
-    case 1: return BoxSumRowsFixed<1>(cols, channels, stride, width, out, out_stride);
-    case 2: return BoxSumRowsFixed<2>(cols, channels, stride, width, out, out_stride);
-    case 3: return BoxSumRowsFixed<3>(cols, channels, stride, width, out, out_stride);
-    case 4: return BoxSumRowsFixed<4>(cols, channels, stride, width, out, out_stride);
-    default: return BoxSumRowsAnyRadius(cols, channels, stride, width, r, out, out_stride);
+    case 1:
+      return BoxSumRowsFixed<1>(cols, channels, stride, width, out, out_stride);
+    case 2:
+      return BoxSumRowsFixed<2>(cols, channels, stride, width, out, out_stride);
+    case 3:
+      return BoxSumRowsFixed<3>(cols, channels, stride, width, out, out_stride);
+    case 4:
+      return BoxSumRowsFixed<4>(cols, channels, stride, width, out, out_stride);
+    default:
+      return BoxSumRowsAnyRadius(cols, channels, stride, width, r, out, out_stride);
   }
 }
 
@@ -230,8 +235,8 @@ long Coefficients(const float* __restrict sums, size_t row_stride, const float* 
 
 // ∂M/∂b of one centred row from its box-summed coefficients (all rows row_stride apart).
 SATMESH_SIMD_CLONES
-void DerivativeRow(const float* __restrict centred, const float* __restrict sums,
-                   size_t row_stride, int width, float* __restrict dM_db) {
+void DerivativeRow(const float* __restrict centred, const float* __restrict sums, size_t row_stride,
+                   int width, float* __restrict dM_db) {
   const float *m = centred, *a = centred + row_stride, *b = centred + 2 * row_stride;
   const float *s0 = sums, *s1 = sums + row_stride, *s2 = sums + 2 * row_stride,
               *s3 = sums + 3 * row_stride;
@@ -249,14 +254,14 @@ void DerivativeRow(const float* __restrict centred, const float* __restrict sums
 // rows. Coefficients: the same running column sums over that ring give ∂M/∂b of row
 // y-r. Rows outside the image are zero. Sums and statistics are float (SIMD width)
 // over centred values; column sums are re-summed exactly every kResumRows rows.
-ZnccField ComputeZnccField(const std::vector<float>& a_image, const std::vector<float>& b_image,
-                           const std::vector<uint8_t>& valid_image, int width, int height,
-                           const ZnccOptions& options, ZnccWorkspace* workspace) {
+void ComputeZnccFieldInto(const std::vector<float>& a_image, const std::vector<float>& b_image,
+                          const std::vector<uint8_t>& valid_image, int width, int height,
+                          const ZnccOptions& options, ZnccField* field_out,
+                          ZnccWorkspace* workspace) {
   ZnccWorkspace local;
   ZnccWorkspace& ws = workspace ? *workspace : local;
   const int w = width, h = height, r = options.window_radius, slots = 2 * r + 2;
-  const float min_count =
-      float(std::ceil(options.min_valid_fraction * (2 * r + 1) * (2 * r + 1)));
+  const float min_count = float(std::ceil(options.min_valid_fraction * (2 * r + 1) * (2 * r + 1)));
   const float eps = float(options.variance_floor);
   const size_t stride = size_t(w) + 2 * r;  // column sum rows, r zeros on both sides
   const float *a = a_image.data(), *b = b_image.data();
@@ -265,7 +270,7 @@ ZnccField ComputeZnccField(const std::vector<float>& a_image, const std::vector<
   float mean_a, mean_b;
   ValidMeans(a, b, valid, w, h, &mean_a, &mean_b);
 
-  ZnccField field;
+  ZnccField& field = *field_out;
   field.dM_db.resize(size_t(w) * h);
   // Work rows a little more than w apart (rows 4 KiB apart slow the loads that follow
   // stores to another row).
@@ -277,7 +282,7 @@ ZnccField ComputeZnccField(const std::vector<float>& a_image, const std::vector<
   ws.zeros.assign(std::max(3, kCoefficients) * row_stride, 0.f);
   float* product_cols = ws.columns.data() + r;  // kProducts rows, x = 0 at offset r
   float* coefficient_cols = product_cols + kProducts * stride;
-  float* sums = ws.rows.data();                  // kProducts rows of window sums
+  float* sums = ws.rows.data();  // kProducts rows of window sums
   float* sigma_ab = sums + kProducts * row_stride;
   float* zncc = sigma_ab + row_stride;
   // Rows k of the rings: centred (m, a, b) and derivative coefficients.
@@ -303,8 +308,8 @@ ZnccField ComputeZnccField(const std::vector<float>& a_image, const std::vector<
   const auto update_products = [&](int enter, int leave) {
     float* c = product_cols;
     UpdateProductColumns(enter < h ? centred(enter) : zeros, leave >= 0 ? centred(leave) : zeros,
-                         row_stride, w, c, c + stride, c + 2 * stride, c + 3 * stride, c + 4 * stride,
-                         c + 5 * stride);
+                         row_stride, w, c, c + stride, c + 2 * stride, c + 3 * stride,
+                         c + 4 * stride, c + 5 * stride);
   };
   const auto update_coefficients = [&](int enter, int leave) {
     UpdateColumns(enter < h ? coefficients(enter) : zeros, leave >= 0 ? coefficients(leave) : zeros,
@@ -335,6 +340,13 @@ ZnccField ComputeZnccField(const std::vector<float>& a_image, const std::vector<
   }
   field.sum_zncc = sum_zncc;
   field.num_windows = num_windows;
+}
+
+ZnccField ComputeZnccField(const std::vector<float>& a, const std::vector<float>& b,
+                           const std::vector<uint8_t>& valid, int width, int height,
+                           const ZnccOptions& options, ZnccWorkspace* workspace) {
+  ZnccField field;
+  ComputeZnccFieldInto(a, b, valid, width, height, options, &field, workspace);
   return field;
 }
 

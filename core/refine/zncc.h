@@ -10,14 +10,14 @@
 namespace satmesh {
 
 struct ZnccOptions {
-  int window_radius = 2;          // window (2r+1)², r >= 1
+  int window_radius = 2;            // window (2r+1)², r >= 1
   double min_valid_fraction = 0.5;  // windows with fewer valid pixels are skipped, (0, 1]
-  double variance_floor = 1e-4;   // added to σ_a² and σ_b² (differentiably), > 0
+  double variance_floor = 1e-4;     // added to σ_a² and σ_b² (differentiably), > 0
 };
 
 struct ZnccField {
-  std::vector<float> dM_db;   // ∂M/∂b per pixel (0 where invalid)
-  double sum_zncc = 0;        // Σ ZNCC over the counted windows (M = -sum_zncc)
+  std::vector<float> dM_db;  // ∂M/∂b per pixel (0 where invalid)
+  double sum_zncc = 0;       // Σ ZNCC over the counted windows (M = -sum_zncc)
   long num_windows = 0;
 };
 
@@ -33,5 +33,11 @@ struct ZnccWorkspace {
 ZnccField ComputeZnccField(const std::vector<float>& a, const std::vector<float>& b,
                            const std::vector<uint8_t>& valid, int width, int height,
                            const ZnccOptions& options, ZnccWorkspace* workspace = nullptr);
+
+// The same into *field, reusing its storage (every pixel of dM_db is written).
+void ComputeZnccFieldInto(const std::vector<float>& a, const std::vector<float>& b,
+                          const std::vector<uint8_t>& valid, int width, int height,
+                          const ZnccOptions& options, ZnccField* field,
+                          ZnccWorkspace* workspace = nullptr);
 
 }  // namespace satmesh
