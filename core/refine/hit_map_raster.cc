@@ -126,4 +126,13 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
   }
 }
 
+void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
+                      std::vector<RasterWorkspace>* workspaces) {
+  workspaces->resize(omp_get_max_threads());
+  // Inside, RasterizeHitMap's own parallel regions run on the calling thread alone.
+#pragma omp parallel for schedule(dynamic, 1)
+  for (size_t v = 0; v < views->size(); ++v)
+    RasterizeHitMap(mesh, &(*views)[v], &(*workspaces)[omp_get_thread_num()]);
+}
+
 }  // namespace satmesh

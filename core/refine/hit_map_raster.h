@@ -24,4 +24,9 @@ struct RasterWorkspace {
 // CastHitMap. Parallel over row bands with OpenMP.
 void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace);
 
+// The hit maps of all views, one view per thread (a view alone does not keep two
+// threads busy: every band must scan every face). workspaces: one per thread, resized.
+void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
+                      std::vector<RasterWorkspace>* workspaces);
+
 }  // namespace satmesh

@@ -134,7 +134,7 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
 
   std::optional<RayScene> scene;  // Embree, unless the hit maps are rasterized
   if (!opt.rasterize_hit_maps) scene.emplace(*mesh);
-  RasterWorkspace raster;
+  std::vector<RasterWorkspace> raster;
   const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
   const size_t nv = mesh->vertices.size();
   stats.num_vertices = int(nv);
@@ -147,7 +147,7 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
     const bool last = it == opt.iterations_per_level;
     auto t0 = Clock::now();
     if (opt.rasterize_hit_maps) {
-      for (auto& v : views) RasterizeHitMap(*mesh, &v, &raster);
+      RasterizeHitMaps(*mesh, &views, &raster);
     } else {
       for (auto& v : views) stats.times.intersect_s += CastHitMap(*scene, &v);
     }

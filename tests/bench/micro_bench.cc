@@ -197,6 +197,15 @@ void BM_RasterizeHitMap(benchmark::State& state) {  // the same hit map without 
 }
 BENCHMARK(BM_RasterizeHitMap)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
+void BM_RasterizeHitMaps4Views(benchmark::State& state) {  // one view per thread
+  std::vector<ViewLevel> views;
+  for (int v = 0; v < 4; ++v) views.push_back(MakeView(v, 15 + 5 * v, 30 + 60 * v));
+  std::vector<RasterWorkspace> workspaces;
+  for (auto _ : state) RasterizeHitMaps(CityMesh(), &views, &workspaces);
+  state.SetItemsProcessed(state.iterations() * 4 * views[0].rays.size());
+}
+BENCHMARK(BM_RasterizeHitMaps4Views)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+
 void BM_MakeViewLevel(benchmark::State& state) {  // virtual camera + lattice + 1M rays
   for (auto _ : state) benchmark::DoNotOptimize(MakeView(0, 20, 30));
 }
