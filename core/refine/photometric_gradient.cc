@@ -3,16 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/common/simd.h"
+
 namespace satmesh {
 namespace {
-
-// Wider SIMD and scalar instructions (VEX, roundsd for the projection's floors) in a
-// portable binary: an AVX2 copy of the warp, picked at load time where the CPU has it.
-#if defined(__x86_64__) && defined(__GNUC__)
-#define SATMESH_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
-#else
-#define SATMESH_AVX2_CLONE
-#endif
 
 // What one pair-direction's warp reads and writes, as plain pointers.
 struct WarpContext {
@@ -28,7 +22,8 @@ struct WarpContext {
 };
 
 // Projects one row of view i's hit points into j, tests visibility, samples j. Per
-// pixel: b, valid, and db_dn = ∂b per unit move of the face along its normal.
+// pixel: b, valid, and db_dn = ∂b per unit move of the face along its normal. The AVX2
+// copy also gets VEX scalar code and roundsd for the projection's floors.
 SATMESH_AVX2_CLONE
 void WarpRow(const WarpContext& c, int row) {
   const ViewLevel& vi = *c.vi;

@@ -8,6 +8,8 @@
 #include <immintrin.h>
 #endif
 
+#include "core/common/simd.h"
+
 namespace satmesh {
 namespace {
 
@@ -25,17 +27,10 @@ inline float Select(bool condition, float v) {
 inline float ClampNonNegative(float v) { return Select(!(v < 0.f), v); }   // max(0, v)
 inline float AtLeastOne(float v) { return v + Select(v < 1.f, 1.f - v); }  // max(1, v)
 
-// Wider SIMD for the row loops in a portable binary: an AVX2 copy, picked at load time
-// where the CPU has it (the build has no -march; AVX-512 measured no faster).
-#if defined(__x86_64__) && defined(__GNUC__)
-#define SATMESH_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define SATMESH_SIMD_CLONES
-#endif
 
 // Sums of the valid entries of a row of a and b, and their number (float lanes: the
 // means only centre the data, any value near them does).
-SATMESH_SIMD_CLONES
+SATMESH_AVX2_CLONE
 void MaskedRowSums(const float* __restrict a, const float* __restrict b,
                    const uint8_t* __restrict valid, int n, double* sum_a, double* sum_b,
                    long* count) {
@@ -80,7 +75,7 @@ void SqrtRow(float* v, int n) {
 // cols + c*stride, with r zeros on both sides). The radius is a template argument for
 // the usual windows, so each sum stays in a register.
 template <int R>
-SATMESH_SIMD_CLONES void BoxSumRowsFixed(const float* cols, int channels, size_t stride, int width,
+SATMESH_AVX2_CLONE void BoxSumRowsFixed(const float* cols, int channels, size_t stride, int width,
                                          float* out, size_t out_stride) {
   for (int c = 0; c < channels; ++c) {
     const float* __restrict in = cols + c * stride - R;
@@ -93,7 +88,7 @@ SATMESH_SIMD_CLONES void BoxSumRowsFixed(const float* cols, int channels, size_t
   }
 }
 
-SATMESH_SIMD_CLONES
+SATMESH_AVX2_CLONE
 void BoxSumRowsAnyRadius(const float* cols, int channels, size_t stride, int width, int r,
                          float* out, size_t out_stride) {
   for (int c = 0; c < channels; ++c) {
@@ -123,7 +118,7 @@ void BoxSumRows(const float* cols, int channels, size_t stride, int width, int r
 
 // cols[c] += enter[c] - leave[c] for `channels` rows (row_stride apart in enter and
 // leave, stride apart in cols).
-SATMESH_SIMD_CLONES
+SATMESH_AVX2_CLONE
 void UpdateColumns(const float* enter, const float* leave, size_t row_stride, int channels,
                    int width, float* cols, size_t stride) {
   for (int c = 0; c < channels; ++c) {
@@ -151,7 +146,7 @@ void ValidMeans(const float* a, const float* b, const uint8_t* valid, int width,
 
 // One image row centred on the means and masked: (valid, a - mean_a, b - mean_b) where
 // valid, zeros elsewhere; three rows, row_stride apart, into `out`.
-SATMESH_SIMD_CLONES
+SATMESH_AVX2_CLONE
 void CentreRow(const float* __restrict a, const float* __restrict b,
                const uint8_t* __restrict valid, float mean_a, float mean_b, int width,
                float* __restrict out, size_t row_stride) {
@@ -167,7 +162,7 @@ void CentreRow(const float* __restrict a, const float* __restrict b,
 // the products of the centred row that enters and subtracts those of the one that
 // leaves (rows of (m, a, b), row_stride apart). Separate restrict pointers: GCC
 // vectorises only then.
-SATMESH_SIMD_CLONES
+SATMESH_AVX2_CLONE
 void UpdateProductColumns(const float* __restrict enter, const float* __restrict leave,
                           size_t row_stride, int width, float* __restrict c0, float* __restrict c1,
                           float* __restrict c2, float* __restrict c3, float* __restrict c4,
@@ -186,7 +181,7 @@ void UpdateProductColumns(const float* __restrict enter, const float* __restrict
 
 // Window statistics of one row from its window sums (kProducts rows, row_stride apart),
 // in two passes around a SIMD sqrt. First σ_a² σ_b² (variances floored):
-SATMESH_SIMD_CLONES
+SATMESH_AVX2_CLONE
 void VarianceProducts(const float* __restrict sums, size_t row_stride, int width, float eps,
                       float* __restrict out) {
   const float *s0 = sums, *s1 = sums + row_stride, *s2 = sums + 2 * row_stride,
@@ -203,7 +198,7 @@ void VarianceProducts(const float* __restrict sums, size_t row_stride, int width
 // Then, with sigma_ab = σ_a σ_b: the derivative coefficients (kCoefficients rows of the
 // given stride, zero where the window is not counted), ZNCC per counted window (0
 // elsewhere); returns the number of counted windows.
-SATMESH_SIMD_CLONES
+SATMESH_AVX2_CLONE
 long Coefficients(const float* __restrict sums, size_t row_stride, const float* __restrict sigma_ab,
                   const float* __restrict valid, int width, float eps, float min_count,
                   float* __restrict zncc_out, float* __restrict coefficients, size_t stride) {
@@ -234,7 +229,7 @@ long Coefficients(const float* __restrict sums, size_t row_stride, const float* 
 }
 
 // ∂M/∂b of one centred row from its box-summed coefficients (all rows row_stride apart).
-SATMESH_SIMD_CLONES
+SATMESH_AVX2_CLONE
 void DerivativeRow(const float* __restrict centred, const float* __restrict sums, size_t row_stride,
                    int width, float* __restrict dM_db) {
   const float *m = centred, *a = centred + row_stride, *b = centred + 2 * row_stride;
