@@ -169,7 +169,8 @@ int RunBench(const std::vector<std::string>& argv) {
                               {"cast_hit_map_s", ray.hit_map_s}, {"raster_s", ray.raster_s},
                               {"raster_agreement", ray.raster_agreement}, {"iteration_s", iteration_s},
                               {"iteration_over_intersect", ratio},
-                              {"iteration_over_in_run_intersect", in_run_ratio}};
+                              {"iteration_over_in_run_intersect",
+                               in_run_intersect_s > 0 ? nlohmann::json(in_run_ratio) : nlohmann::json()}};
     report["prepare_s"] = outputs.prepare_s;
     report["refine_s"] = refine.total_s;
     report["write_s"] = outputs.write_s;

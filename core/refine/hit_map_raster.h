@@ -3,9 +3,10 @@
 // (face, barycentrics, point, ray parameter of the first surface along the ray), found
 // by projecting the mesh into the view through the RFM (the level's projection grid) and
 // scanning each triangle's pixels. At the refinement's resolution a triangle covers ~2
-// pixels, over which the RFM is affine to < 1e-6 px, so the pixel-centre tests and the
-// barycentrics are exact to rounding; the depth order is the distance along the view's
-// mean ray (rays of one view are parallel to < 1e-3 rad over a tile).
+// pixels, over which the RFM is affine, so the pixel-centre tests and the barycentrics
+// are as exact as the projection grid (< 1e-3 px on real RPCs); the depth order is the
+// distance along the view's mean ray (rays of one view are parallel to < 1e-3 rad over
+// a tile).
 #include <vector>
 
 #include "core/mesh/mesh.h"
@@ -13,7 +14,7 @@
 
 namespace satmesh {
 
-// Per-view scratch of the rasterizer, reused across iterations.
+// Scratch of the rasterizer (one per thread), reused across views and iterations.
 struct RasterWorkspace {
   std::vector<Eigen::Vector2d> pixels;  // projected vertices (GDAL pixel coordinates)
   std::vector<float> vertex_depth;      // per vertex, along the view's mean ray
