@@ -20,6 +20,8 @@ struct PhotometricOptions {
   ZnccOptions zncc;
   double visibility_tolerance_m = 0.6;  // depth test: |X - X_j| below this, metres, > 0
   double min_ray_cos = 0.1;             // ignore pixels whose |cos(ray, normal)| is below, [0,1)
+  bool vectorized = true;               // AVX2 warp where the CPU has it (warp.h); false:
+                                        // the scalar reference
 };
 
 struct PairEnergy {

@@ -25,6 +25,26 @@ ProjectionGrid::ProjectionGrid(const RpcModel& rpc_level, const LocalFrame& fram
         Cell& cell = cells_[(size_t(k) * ny_ + j) * nx_ + i];
         cell.pixel = ExactPixelFromLocal(centre, &cell.pixel_from_local);
       }
+  float_cells_.resize(cells_.size());
+  for (size_t c = 0; c < cells_.size(); ++c) {
+    FloatCell& f = float_cells_[c];
+    for (int r = 0; r < 2; ++r) {
+      f.pixel[r] = float(cells_[c].pixel[r]);
+      for (int k = 0; k < 3; ++k) f.jacobian[3 * r + k] = float(cells_[c].pixel_from_local(r, k));
+    }
+  }
+}
+
+ProjectionGrid::FloatLattice ProjectionGrid::float_lattice() const {
+  FloatLattice l;
+  l.cells = float_cells_.data();
+  for (int a = 0; a < 3; ++a) {
+    l.origin[a] = float(origin_[a]);
+    l.inv_spacing[a] = float(inv_spacing_[a]);
+    l.spacing[a] = float(spacing_[a]);
+  }
+  l.n[0] = nx_, l.n[1] = ny_, l.n[2] = nz_;
+  return l;
 }
 
 Eigen::Vector2d ProjectionGrid::ExactPixelFromLocal(const Eigen::Vector3d& X,

@@ -35,6 +35,22 @@ class ProjectionGrid {
     return cell.pixel + cell.pixel_from_local * d;
   }
 
+  // The same lattice in float, for vectorised projection (8 points at a time): cell
+  // (i, j, k) is cells[(k ny + j) nx + i], and pixel = cell.pixel + J (g - ijk - 0.5)
+  // spacing with g = (X - origin) inv_spacing. Rounding the cell centres' pixels to
+  // float adds < 2.5e-4 px (images below 4096 px) to the lattice's < 1e-3 px. Points
+  // outside the lattice (g out of [0, n)) need PixelFromLocal.
+  struct FloatCell {
+    float pixel[2];
+    float jacobian[6];  // d(col, row)/d(x, y, z), row-major
+  };
+  struct FloatLattice {
+    const FloatCell* cells;
+    float origin[3], inv_spacing[3], spacing[3];
+    int n[3];
+  };
+  FloatLattice float_lattice() const;
+
  private:
   Eigen::Vector2d ExactPixelFromLocal(const Eigen::Vector3d& X,
                                       Eigen::Matrix<double, 2, 3>* pixel_from_local) const;
@@ -48,6 +64,7 @@ class ProjectionGrid {
   Eigen::Vector3d origin_{0, 0, 0}, spacing_{1, 1, 1}, inv_spacing_{1, 1, 1};
   int nx_ = 0, ny_ = 0, nz_ = 0;  // cells per axis
   std::vector<Cell> cells_;       // x fastest
+  std::vector<FloatCell> float_cells_;
 };
 
 }  // namespace satmesh

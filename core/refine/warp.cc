@@ -1,0 +1,238 @@
+#include "core/refine/warp.h"
+
+#include <cstring>
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define SATMESH_HAVE_AVX2_WARP 1
+#endif
+
+namespace satmesh {
+namespace {
+
+// The scalar reference for one pixel p = (row, col) of view i.
+inline void WarpPixel(const WarpContext& c, size_t p) {
+  const ViewLevel& vi = *c.vi;
+  const ViewLevel& vj = *c.vj;
+  const int face = vi.hit_map.faces[p];
+  if (face < 0) return;
+  const Eigen::Vector3f& ray_dir = vi.rays[p].direction;
+  const float cos_ray = c.cos_i ? c.cos_i[p] : ray_dir.dot((*c.face_normals)[face]);
+  if (cos_ray > -c.min_cos) return;  // grazing or back-facing
+  const Eigen::Vector3f& X = vi.hit_map.points[p];
+  Eigen::Matrix<double, 2, 3> pixel_from_local;
+  const Eigen::Vector2d xj = vj.projection.PixelFromLocal(X.cast<double>(), &pixel_from_local);
+  const int wj = vj.width();
+  if (!(xj.x() >= 1.0 && xj.y() >= 1.0 && xj.x() < wj - 1.0 && xj.y() < vj.height() - 1.0)) return;
+  // Visibility in j: j's own ray through that pixel must hit the same surface point (the
+  // same face needs no point read).
+  const size_t q = size_t(int(xj.y())) * wj + int(xj.x());
+  const int face_j = vj.hit_map.faces[q];
+  if (face_j != face && (face_j < 0 || (vj.hit_map.points[q] - X).squaredNorm() > c.tol2)) return;
+  // Bilinear sample of j (centre-origin coordinates, at least half a pixel inside) with
+  // the exact derivatives of the interpolant.
+  const double u = xj.x() - 0.5, v = xj.y() - 0.5;
+  const int iu = int(u), iv = int(v);
+  const float fx = float(u - iu), fy = float(v - iv);
+  const float* s = vj.image.pixels.data() + size_t(iv) * wj + iu;
+  const float p00 = s[0], p10 = s[1], p01 = s[wj], p11 = s[wj + 1];
+  const float top = p00 + fx * (p10 - p00), bottom = p01 + fx * (p11 - p01);
+  const float db_dx = (p10 - p00) + fy * ((p11 - p01) - (p10 - p00)), db_dy = bottom - top;
+  // DΠ_j in the local frame along the ray: dx_j/dt.
+  const Eigen::Vector2d dx_dt = pixel_from_local * ray_dir.cast<double>();
+  const float db_dt = db_dx * float(dx_dt.x()) + db_dy * float(dx_dt.y());
+  c.b[p] = top + fy * (bottom - top);
+  c.db_dn[p] = db_dt / cos_ray;
+  c.valid[p] = 1;
+}
+
+void WarpRowScalar(const WarpContext& c, int row, int col_begin, int col_end) {
+  const size_t base = size_t(row) * c.vi->width();
+  for (int col = col_begin; col < col_end; ++col) WarpPixel(c, base + col);
+}
+
+#ifdef SATMESH_HAVE_AVX2_WARP
+
+#define SATMESH_AVX2 __attribute__((target("avx2,fma,bmi2")))
+
+// Masked gathers: lanes off the mask read nothing and give 0.
+SATMESH_AVX2 inline __m256 Gather(const float* base, __m256i index, __m256 mask) {
+  return _mm256_mask_i32gather_ps(_mm256_setzero_ps(), base, index, mask, 4);
+}
+SATMESH_AVX2 inline __m256i GatherInt(const int* base, __m256i index, __m256i mask, __m256i fill) {
+  return _mm256_mask_i32gather_epi32(fill, base, index, mask, 4);
+}
+
+// One row of view i, 8 pixels at a time.
+struct RowWarpAvx2 {
+  const WarpContext& c;
+  size_t base;              // first pixel of the row
+  int wj;
+  const float* cells;       // j's float lattice, 8 floats a cell
+  const int* faces_i;       // this row's
+  const float* cos_i;
+  const float* points_i;    // 3 floats a pixel
+  const float* rays_i;      // 8 floats a Ray, direction at +3
+  const int* faces_j;
+  const float* points_j;
+  const float* image_j;
+  __m256 origin[3], inv_spacing[3], spacing[3], n_cells[3];
+  __m256i nx, ny;
+
+  SATMESH_AVX2 RowWarpAvx2(const WarpContext& context, int row) : c(context) {
+    const ViewLevel& vi = *c.vi;
+    const ViewLevel& vj = *c.vj;
+    wj = vj.width();
+    base = size_t(row) * vi.width();
+    const ProjectionGrid::FloatLattice lat = vj.projection.float_lattice();
+    cells = &lat.cells[0].pixel[0];
+    faces_i = vi.hit_map.faces.data() + base;
+    cos_i = c.cos_i + base;
+    points_i = vi.hit_map.points[base].data();
+    rays_i = vi.rays[base].direction.data();
+    faces_j = vj.hit_map.faces.data();
+    points_j = vj.hit_map.points.data()->data();
+    image_j = vj.image.pixels.data();
+    for (int a = 0; a < 3; ++a) {
+      origin[a] = _mm256_set1_ps(lat.origin[a]);
+      inv_spacing[a] = _mm256_set1_ps(lat.inv_spacing[a]);
+      spacing[a] = _mm256_set1_ps(lat.spacing[a]);
+      n_cells[a] = _mm256_set1_ps(float(lat.n[a]));
+    }
+    nx = _mm256_set1_epi32(lat.n[0]);
+    ny = _mm256_set1_epi32(lat.n[1]);
+  }
+
+  // Pixels [col, col + 8): writes b, db_dn and valid of all 8. Returns the lanes (bits)
+  // that fall outside j's lattice, for the scalar path.
+  SATMESH_AVX2 int Group(int col) const {
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    const __m256i minus1 = _mm256_set1_epi32(-1), wj_v = _mm256_set1_epi32(wj);
+    const __m256 half = _mm256_set1_ps(0.5f), one = _mm256_set1_ps(1.f), zero = _mm256_setzero_ps();
+    // Hit, facing the view.
+    const __m256i face = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(faces_i + col));
+    const __m256 cos_ray = _mm256_loadu_ps(cos_i + col);
+    const __m256 hit = _mm256_castsi256_ps(_mm256_cmpgt_epi32(face, minus1));
+    const __m256 facing =
+        _mm256_and_ps(hit, _mm256_cmp_ps(cos_ray, _mm256_set1_ps(-c.min_cos), _CMP_LE_OQ));
+    if (_mm256_testz_ps(facing, facing)) return 0;
+    // X, and its lattice cell in j.
+    const __m256i pixel = _mm256_add_epi32(_mm256_set1_epi32(col), lane);
+    const __m256i idx3 = _mm256_add_epi32(pixel, _mm256_add_epi32(pixel, pixel));
+    __m256 X[3], g[3], cell_f[3];
+    __m256 in_lattice = facing;
+    for (int a = 0; a < 3; ++a) {
+      X[a] = Gather(points_i + a, idx3, facing);
+      g[a] = _mm256_mul_ps(_mm256_sub_ps(X[a], origin[a]), inv_spacing[a]);
+      cell_f[a] = _mm256_floor_ps(g[a]);
+      in_lattice = _mm256_and_ps(in_lattice, _mm256_and_ps(_mm256_cmp_ps(g[a], zero, _CMP_GE_OQ),
+                                                           _mm256_cmp_ps(g[a], n_cells[a], _CMP_LT_OQ)));
+    }
+    const int outside = _mm256_movemask_ps(_mm256_andnot_ps(in_lattice, facing));
+    if (_mm256_testz_ps(in_lattice, in_lattice)) return outside;
+    const __m256i cell = _mm256_add_epi32(
+        _mm256_mullo_epi32(_mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(cell_f[2]), ny),
+                                            _mm256_cvttps_epi32(cell_f[1])),
+                           nx),
+        _mm256_cvttps_epi32(cell_f[0]));
+    const __m256i cell8 = _mm256_slli_epi32(cell, 3);
+    __m256 d[3], J[6];
+    for (int a = 0; a < 3; ++a)
+      d[a] = _mm256_mul_ps(_mm256_sub_ps(g[a], _mm256_add_ps(cell_f[a], half)), spacing[a]);
+    for (int k = 0; k < 6; ++k) J[k] = Gather(cells + 2 + k, cell8, in_lattice);
+    const __m256 xj = _mm256_fmadd_ps(J[2], d[2], _mm256_fmadd_ps(J[1], d[1],
+                      _mm256_fmadd_ps(J[0], d[0], Gather(cells, cell8, in_lattice))));
+    const __m256 yj = _mm256_fmadd_ps(J[5], d[2], _mm256_fmadd_ps(J[4], d[1],
+                      _mm256_fmadd_ps(J[3], d[0], Gather(cells + 1, cell8, in_lattice))));
+    const __m256 max_x = _mm256_set1_ps(float(wj - 1)), max_y = _mm256_set1_ps(float(c.vj->height() - 1));
+    const __m256 inside = _mm256_and_ps(
+        in_lattice, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(xj, one, _CMP_GE_OQ),
+                                                _mm256_cmp_ps(yj, one, _CMP_GE_OQ)),
+                                  _mm256_and_ps(_mm256_cmp_ps(xj, max_x, _CMP_LT_OQ),
+                                                _mm256_cmp_ps(yj, max_y, _CMP_LT_OQ))));
+    if (_mm256_testz_ps(inside, inside)) return outside;
+    // Visibility in j: the same face, or j's point within the tolerance.
+    const __m256i q = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(yj), wj_v),
+                                       _mm256_cvttps_epi32(xj));
+    const __m256i face_j = GatherInt(faces_j, q, _mm256_castps_si256(inside), minus1);
+    const __m256 same = _mm256_castsi256_ps(_mm256_cmpeq_epi32(face_j, face));
+    const __m256 other = _mm256_andnot_ps(
+        same, _mm256_and_ps(inside, _mm256_castsi256_ps(_mm256_cmpgt_epi32(face_j, minus1))));
+    const __m256i q3 = _mm256_add_epi32(q, _mm256_add_epi32(q, q));
+    __m256 dist2 = zero;
+    for (int a = 0; a < 3; ++a) {
+      const __m256 diff = _mm256_sub_ps(Gather(points_j + a, q3, other), X[a]);
+      dist2 = _mm256_fmadd_ps(diff, diff, dist2);
+    }
+    const __m256 near = _mm256_and_ps(other, _mm256_cmp_ps(dist2, _mm256_set1_ps(c.tol2), _CMP_LE_OQ));
+    const __m256 used = _mm256_and_ps(inside, _mm256_or_ps(same, near));
+    const int used_bits = _mm256_movemask_ps(used);
+    if (!used_bits) return outside;
+    // Bilinear sample of j and the derivatives of the interpolant.
+    const __m256 u = _mm256_sub_ps(xj, half), v = _mm256_sub_ps(yj, half);
+    const __m256i iu = _mm256_cvttps_epi32(u), iv = _mm256_cvttps_epi32(v);
+    const __m256 fx = _mm256_sub_ps(u, _mm256_cvtepi32_ps(iu));
+    const __m256 fy = _mm256_sub_ps(v, _mm256_cvtepi32_ps(iv));
+    const __m256i s = _mm256_add_epi32(_mm256_mullo_epi32(iv, wj_v), iu);
+    const __m256i s_down = _mm256_add_epi32(s, wj_v);
+    const __m256 p00 = Gather(image_j, s, used), p10 = Gather(image_j + 1, s, used);
+    const __m256 p01 = Gather(image_j, s_down, used), p11 = Gather(image_j + 1, s_down, used);
+    const __m256 dx_top = _mm256_sub_ps(p10, p00), dx_bottom = _mm256_sub_ps(p11, p01);
+    const __m256 top = _mm256_fmadd_ps(fx, dx_top, p00);
+    const __m256 bottom = _mm256_fmadd_ps(fx, dx_bottom, p01);
+    const __m256 db_dx = _mm256_fmadd_ps(fy, _mm256_sub_ps(dx_bottom, dx_top), dx_top);
+    const __m256 db_dy = _mm256_sub_ps(bottom, top);
+    // DΠ_j along view i's ray.
+    const __m256i ray_index = _mm256_slli_epi32(pixel, 3);
+    __m256 ray[3];
+    for (int a = 0; a < 3; ++a) ray[a] = Gather(rays_i + a, ray_index, used);
+    const __m256 dx_dt =
+        _mm256_fmadd_ps(J[2], ray[2], _mm256_fmadd_ps(J[1], ray[1], _mm256_mul_ps(J[0], ray[0])));
+    const __m256 dy_dt =
+        _mm256_fmadd_ps(J[5], ray[2], _mm256_fmadd_ps(J[4], ray[1], _mm256_mul_ps(J[3], ray[0])));
+    const __m256 db_dt = _mm256_fmadd_ps(db_dx, dx_dt, _mm256_mul_ps(db_dy, dy_dt));
+    const __m256 b = _mm256_fmadd_ps(fy, db_dy, top);
+    const __m256 db_dn = _mm256_div_ps(db_dt, _mm256_blendv_ps(one, cos_ray, used));
+    _mm256_storeu_ps(c.b + base + col, _mm256_and_ps(b, used));
+    _mm256_storeu_ps(c.db_dn + base + col, _mm256_and_ps(db_dn, used));
+    const uint64_t bytes = _pdep_u64(uint64_t(used_bits), 0x0101010101010101ULL);
+    std::memcpy(c.valid + base + col, &bytes, 8);
+    return outside;
+  }
+};
+
+// 8 pixels at a time from col_begin; returns the first column left for the scalar path.
+SATMESH_AVX2 int WarpRowAvx2(const WarpContext& c, int row, int col_begin, int col_end) {
+  const RowWarpAvx2 warp(c, row);
+  int col = col_begin;
+  for (; col + 8 <= col_end; col += 8) {
+    int outside = warp.Group(col);
+    for (; outside; outside &= outside - 1) WarpPixel(c, warp.base + col + __builtin_ctz(outside));
+  }
+  return col;
+}
+
+#endif  // SATMESH_HAVE_AVX2_WARP
+
+}  // namespace
+
+bool WarpHasAvx2() {
+#ifdef SATMESH_HAVE_AVX2_WARP
+  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                          __builtin_cpu_supports("bmi2");
+  return has;
+#else
+  return false;
+#endif
+}
+
+void WarpRow(const WarpContext& c, int row, bool vectorized) {
+  int col = 0;
+  const int width = c.vi->width();
+#ifdef SATMESH_HAVE_AVX2_WARP
+  if (vectorized && c.cos_i && WarpHasAvx2()) col = WarpRowAvx2(c, row, 0, width);
+#endif
+  WarpRowScalar(c, row, col, width);
+}
+
+}  // namespace satmesh
