@@ -32,31 +32,54 @@ void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
 
 }  // namespace
 
-void GradientAccumulator::Reset(size_t num_faces, size_t num_vertices) {
-  faces_.assign(num_faces, FaceSlot());
-  vertex_stamp_.assign(num_vertices, 0);
-  seen_.assign(num_vertices, 0);
-  direction_ = 0;
+void GradientAccumulator::Reset(const TriangleMesh& mesh) {
+  mesh_ = &mesh;
+  faces_.assign(mesh.faces.size(), FaceSlot());
+  vertex_directions_.assign(mesh.vertices.size(), 0);
+  seen_.assign(mesh.vertices.size(), 0);
+  direction_ = -1;
+  direction_bit_ = 0;
 }
 
-void GradientAccumulator::AddTo(const TriangleMesh& mesh,
-                                const std::vector<Eigen::Vector3f>& face_normals,
+void GradientAccumulator::BeginDirection() {
+  ++direction_;
+  if (direction_ > 0 && direction_ % 32 == 0) CountDirections();
+  direction_bit_ = 1u << (direction_ % 32);
+}
+
+void GradientAccumulator::CountDirections() {
+  for (size_t f = 0; f < faces_.size(); ++f) {
+    const uint32_t bits = faces_[f].directions;
+    if (!bits) continue;
+    faces_[f].directions = 0;
+    for (int k = 0; k < 3; ++k) vertex_directions_[mesh_->faces[f][k]] |= bits;
+  }
+  for (size_t v = 0; v < seen_.size(); ++v) {
+    seen_[v] += __builtin_popcount(vertex_directions_[v]);
+    vertex_directions_[v] = 0;
+  }
+}
+
+void GradientAccumulator::AddTo(const std::vector<Eigen::Vector3f>& face_normals,
                                 std::vector<Eigen::Vector3d>* vertex_gradient,
-                                std::vector<int>* seen) const {
+                                std::vector<int>* seen) {
+  if (!mesh_) return;
   if (vertex_gradient) {
-    for (size_t f = 0; f < mesh.faces.size(); ++f) {
-      if (faces_[f].stamp == 0) continue;  // no pixel
+    for (size_t f = 0; f < faces_.size(); ++f) {
+      const Eigen::Vector3f& w = faces_[f].weights;
+      if (w.x() == 0 && w.y() == 0 && w.z() == 0) continue;  // no pixel
       const Eigen::Vector3d normal = face_normals[f].cast<double>();
-      const Eigen::Vector3i& face = mesh.faces[f];
-      for (int k = 0; k < 3; ++k) (*vertex_gradient)[face[k]] += double(faces_[f].weights[k]) * normal;
+      const Eigen::Vector3i& face = mesh_->faces[f];
+      for (int k = 0; k < 3; ++k) (*vertex_gradient)[face[k]] += double(w[k]) * normal;
     }
   }
-  if (seen)
+  if (seen) {
+    CountDirections();
     for (size_t v = 0; v < seen_.size(); ++v) (*seen)[v] += seen_[v];
+  }
 }
 
 PairEnergy AccumulatePairGradient(const ViewLevel& view_i, const ViewLevel& view_j,
-                                  const TriangleMesh& mesh,
                                   const std::vector<Eigen::Vector3f>& face_normals,
                                   const PhotometricOptions& options,
                                   GradientAccumulator* accumulator, PairWorkspace* workspace) {
@@ -77,8 +100,7 @@ PairEnergy AccumulatePairGradient(const ViewLevel& view_i, const ViewLevel& view
     if (!accumulator) continue;
     // ∂b/∂V_k = db_dn · w_k · n^T (ray-triangle intersection moved by vertex k).
     const RayHit& hit = hits[p];
-    accumulator->AddPixel(mesh.faces[hit.face], hit.face, hit.u, hit.v,
-                          field.dM_db[p] * warp.db_dn[p]);
+    accumulator->AddPixel(hit.face, hit.u, hit.v, field.dM_db[p] * warp.db_dn[p]);
   }
   return energy;
 }
@@ -91,13 +113,13 @@ PairEnergy AccumulatePhotometricGradient(const ViewLevel& view_i, const ViewLeve
                                          std::vector<uint8_t>* touched,
                                          PairWorkspace* workspace) {
   if (!vertex_gradient && !touched)
-    return AccumulatePairGradient(view_i, view_j, mesh, face_normals, options, nullptr, workspace);
+    return AccumulatePairGradient(view_i, view_j, face_normals, options, nullptr, workspace);
   GradientAccumulator accumulator;
-  accumulator.Reset(mesh.faces.size(), mesh.vertices.size());
-  const PairEnergy energy = AccumulatePairGradient(view_i, view_j, mesh, face_normals, options,
+  accumulator.Reset(mesh);
+  const PairEnergy energy = AccumulatePairGradient(view_i, view_j, face_normals, options,
                                                    &accumulator, workspace);
   std::vector<int> seen(touched ? mesh.vertices.size() : 0, 0);
-  accumulator.AddTo(mesh, face_normals, vertex_gradient, touched ? &seen : nullptr);
+  accumulator.AddTo(face_normals, vertex_gradient, touched ? &seen : nullptr);
   if (touched)
     for (size_t v = 0; v < seen.size(); ++v)
       if (seen[v]) (*touched)[v] = 1;

@@ -7,6 +7,7 @@
 // φ visibility in both views). This is the exact derivative of the discrete energy for
 // fixed visibility; multiplying by the level GSD (in the update) makes it scale-free.
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "core/geo/local_frame.h"
@@ -40,42 +41,45 @@ struct PairWorkspace {
 
 // The photometric gradient of many pair-directions, gathered per face (one thread's
 // share): pixels add g·(w0, w1, w2) to their face (g = ∂M/∂b · ∂b/∂n, w the barycentric
-// weights), and only AddTo() multiplies by the face normals and scatters to vertices.
-// This keeps the per-pixel work to three float adds into a face-ordered array.
+// weights) and mark the face seen by the current direction; only AddTo() multiplies by
+// the face normals and scatters to vertices. A pixel's work is three float adds and an OR
+// into one 16-byte slot: which vertices a direction saw is worked out from the faces'
+// direction bits, 32 directions at a time.
 class GradientAccumulator {
  public:
-  // Zeroes everything for a mesh of num_faces faces and num_vertices vertices.
-  void Reset(size_t num_faces, size_t num_vertices);
+  // Zeroes everything for `mesh` (kept by reference until AddTo).
+  void Reset(const TriangleMesh& mesh);
   // Starts a new pair-direction (for counting the directions that see each vertex).
-  void BeginDirection() { ++direction_; }
-  void AddPixel(const Eigen::Vector3i& face_vertices, int face, float u, float v, float g) {
+  void BeginDirection();
+  void AddPixel(int face, float u, float v, float g) {
     FaceSlot& slot = faces_[face];
     slot.weights += Eigen::Vector3f(g * (1.f - u - v), g * u, g * v);
-    if (slot.stamp == direction_) return;
-    slot.stamp = direction_;
-    for (int k = 0; k < 3; ++k) {
-      const int vertex = face_vertices[k];
-      if (vertex_stamp_[vertex] != direction_) vertex_stamp_[vertex] = direction_, ++seen_[vertex];
-    }
+    slot.directions |= direction_bit_;
   }
   // vertex_gradient[v] += Σ_faces weight · normal; seen[v] += directions that saw v.
-  void AddTo(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& face_normals,
-             std::vector<Eigen::Vector3d>* vertex_gradient, std::vector<int>* seen) const;
+  void AddTo(const std::vector<Eigen::Vector3f>& face_normals,
+             std::vector<Eigen::Vector3d>* vertex_gradient, std::vector<int>* seen);
 
  private:
+  // Adds the directions marked on the faces to their vertices' counts; clears the marks.
+  void CountDirections();
+
   struct FaceSlot {  // one 16-byte slot per face: a pixel touches one cache line
     Eigen::Vector3f weights = Eigen::Vector3f::Zero();
-    int stamp = 0;  // last direction that saw the face (0: none)
+    uint32_t directions = 0;  // bit d % 32: direction d saw the face (since the last count)
   };
+  const TriangleMesh* mesh_ = nullptr;
   std::vector<FaceSlot> faces_;
-  std::vector<int> vertex_stamp_, seen_;
-  int direction_ = 0;
+  std::vector<uint32_t> vertex_directions_;
+  std::vector<int> seen_;
+  int direction_ = -1;
+  uint32_t direction_bit_ = 0;
 };
 
 // One ordered pair (i -> j): returns the energy terms and, if accumulator is not null,
-// adds the pair-direction's gradient to it. Hit maps of both views must be current.
+// adds the pair-direction's gradient to it (Reset for the mesh whose faces the hit maps
+// index). Hit maps of both views must be current.
 PairEnergy AccumulatePairGradient(const ViewLevel& view_i, const ViewLevel& view_j,
-                                  const TriangleMesh& mesh,
                                   const std::vector<Eigen::Vector3f>& face_normals,
                                   const PhotometricOptions& options,
                                   GradientAccumulator* accumulator, PairWorkspace* workspace);

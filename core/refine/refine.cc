@@ -70,20 +70,20 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
 #pragma omp parallel
   {
     GradientAccumulator accumulator;
-    if (accumulate) accumulator.Reset(mesh.faces.size(), mesh.vertices.size());
+    if (accumulate) accumulator.Reset(mesh);
     PairWorkspace workspace;
 #pragma omp for schedule(dynamic, 1) reduction(+ : sum, count)
     for (size_t d = 0; d < directions.size(); ++d) {
       const auto [a, b] = directions[d];
       const PairEnergy e =
-          AccumulatePairGradient(views[slot[a]], views[slot[b]], mesh, normals, options,
+          AccumulatePairGradient(views[slot[a]], views[slot[b]], normals, options,
                                  accumulate ? &accumulator : nullptr, &workspace);
       sum += e.sum_zncc;
       count += e.num_windows;
     }
     if (accumulate) {
 #pragma omp critical
-      accumulator.AddTo(mesh, normals, gradient, seen);
+      accumulator.AddTo(normals, gradient, seen);
     }
   }
   return count > 0 ? sum / count : 0.0;

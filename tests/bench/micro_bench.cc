@@ -276,11 +276,11 @@ void BM_PairDirectionRefinement(benchmark::State& state) {
   PhotometricOptions options;
   options.visibility_tolerance_m = 2 * kGsdM;
   GradientAccumulator accumulator;
-  accumulator.Reset(mesh.faces.size(), mesh.vertices.size());
+  accumulator.Reset(mesh);
   PairWorkspace workspace;
   for (auto _ : state)
     benchmark::DoNotOptimize(
-        AccumulatePairGradient(view_i, view_j, mesh, normals, options, &accumulator, &workspace));
+        AccumulatePairGradient(view_i, view_j, normals, options, &accumulator, &workspace));
   state.SetItemsProcessed(state.iterations() * view_i.width() * view_i.height());
 }
 BENCHMARK(BM_PairDirectionRefinement)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();

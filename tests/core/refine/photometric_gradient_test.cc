@@ -79,6 +79,39 @@ TEST(AccumulatePhotometricGradient, MatchesFiniteDifferencesOfTheEnergy) {
   EXPECT_GT(max_abs_gradient, 1.0);  // the check is not vacuous
 }
 
+// Two triangles sharing an edge (vertices 1, 2): over 70 pair-directions (more than the
+// 32 the face bits hold between counts), count the directions that saw each vertex.
+TEST(GradientAccumulator, CountsTheDirectionsThatSawEachVertex) {
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  mesh.faces = {{0, 1, 2}, {1, 3, 2}};
+  GradientAccumulator accumulator;
+  accumulator.Reset(mesh);
+  int expected_face0 = 0, expected_face1 = 0, expected_both = 0;
+  for (int d = 0; d < 70; ++d) {
+    accumulator.BeginDirection();
+    const bool face0 = d % 3 == 0, face1 = d % 5 == 0;
+    for (int pixel = 0; pixel < 4; ++pixel) {  // several pixels a face: counted once
+      if (face0) accumulator.AddPixel(0, 0.25f, 0.25f, 1.f);
+      if (face1) accumulator.AddPixel(1, 0.5f, 0.25f, 2.f);
+    }
+    expected_face0 += face0, expected_face1 += face1, expected_both += face0 || face1;
+  }
+  const std::vector<Eigen::Vector3f> normals(2, Eigen::Vector3f::UnitZ());
+  std::vector<Eigen::Vector3d> gradient(4, Eigen::Vector3d::Zero());
+  std::vector<int> seen(4, 0);
+  accumulator.AddTo(normals, &gradient, &seen);
+  EXPECT_EQ(seen[0], expected_face0);  // 24
+  EXPECT_EQ(seen[3], expected_face1);  // 14
+  EXPECT_EQ(seen[1], expected_both);   // 38
+  EXPECT_EQ(seen[2], expected_both);
+  // Vertex 0: face 0's weight 1 - u - v = 0.5, g = 1, 4 pixels a direction, 24 directions.
+  EXPECT_NEAR(gradient[0].z(), 0.5 * 4 * expected_face0, 1e-4);
+  // Vertex 3 (face 1's second vertex, weight u = 0.5, g = 2).
+  EXPECT_NEAR(gradient[3].z(), 0.5 * 2 * 4 * expected_face1, 1e-4);
+  EXPECT_EQ(gradient[0].x(), 0.0);
+}
+
 TEST(AccumulatePhotometricGradient, VectorizedWarpMatchesTheScalarReference) {
   if (!WarpHasAvx2()) GTEST_SKIP() << "no AVX2 on this CPU: the scalar warp is the only one";
   TriangleMesh mesh = testing::PlaneMesh(testing::Plane{}, 20, 2.0, 0.4);
