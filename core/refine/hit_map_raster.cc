@@ -34,7 +34,7 @@ inline int CeilInt(double a) { const int i = int(a); return i + (a > i); }
 // The view's mean ray direction (unit), from the central pixel's ray.
 Eigen::Vector3f MeanRayDirection(const ViewLevel& view) {
   const size_t centre = size_t(view.height() / 2) * view.width() + view.width() / 2;
-  return view.rays[centre].direction.normalized();
+  return view.ray_directions[centre].normalized();
 }
 
 // Rasterizes every face into rows [row_begin, row_end): face id, barycentrics and depth
@@ -54,6 +54,7 @@ void RasterizeBand(const TriangleMesh& mesh, const RasterWorkspace& ws, int widt
     const int r1 = std::min(row_end - 1, FloorInt(std::min(max_y, double(row_end)) - 0.5));
     const int c0 = std::max(0, CeilInt(std::max(min_x, -1.0) - 0.5));
     const int c1 = std::min(width - 1, FloorInt(std::min(max_x, double(width)) - 0.5));
+    if (r0 > r1 || c0 > c1) continue;  // no pixel centre in the box (~1 face in 3 here)
     const float d0 = ws.vertex_depth[face[0]], d1 = ws.vertex_depth[face[1]],
                 d2 = ws.vertex_depth[face[2]];
     const Edge e0 = MakeEdge(px, face[1], face[2]);  // weight of vertex 0
@@ -82,7 +83,8 @@ void RasterizeBand(const TriangleMesh& mesh, const RasterWorkspace& ws, int widt
 
 }  // namespace
 
-void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace) {
+void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace,
+                     const std::vector<Eigen::Vector3f>* face_normals) {
   RasterWorkspace& ws = *workspace;
   HitMap& map = view->hit_map;
   const int w = view->width(), h = view->height();
@@ -90,6 +92,7 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
   map.hits.assign(n, RayHit{});
   map.points.resize(n);
   map.faces.resize(n);
+  if (face_normals) map.ray_cos.resize(n);
   ws.depth.assign(n, std::numeric_limits<float>::infinity());
   const Eigen::Vector3f along = MeanRayDirection(*view);
   const size_t nv = mesh.vertices.size();
@@ -110,29 +113,34 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
     const int row_begin = int(long(h) * t / threads), row_end = int(long(h) * (t + 1) / threads);
     RasterizeBand(mesh, ws, w, row_begin, row_end, &map.hits, ws.depth.data());
   }
-  // The hit point on the face, and its parameter along the pixel's ray.
+  // The hit point on the face, its parameter along the pixel's ray (unit direction from
+  // the plane z = z_high), and the ray cosine.
+  const float z_high = float(view->camera.z_high());
 #pragma omp parallel for schedule(static)
   for (long p = 0; p < long(n); ++p) {
     RayHit& hit = map.hits[p];
     map.faces[p] = hit.face;
+    if (face_normals) map.ray_cos[p] = 0.f;
     if (!hit.hit()) continue;
     const Eigen::Vector3i& f = mesh.faces[hit.face];
     const Eigen::Vector3f& p0 = mesh.vertices[f[0]];
     const Eigen::Vector3f X =
         p0 + hit.u * (mesh.vertices[f[1]] - p0) + hit.v * (mesh.vertices[f[2]] - p0);
-    const Ray& ray = view->rays[p];
-    hit.t = (X - ray.origin).dot(ray.direction) / ray.direction.squaredNorm();
+    const Eigen::Vector3f& direction = view->ray_directions[p];
+    hit.t = (X.z() - z_high) / direction.z();
     map.points[p] = X;
+    if (face_normals) map.ray_cos[p] = direction.dot((*face_normals)[hit.face]);
   }
 }
 
 void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
-                      std::vector<RasterWorkspace>* workspaces) {
+                      std::vector<RasterWorkspace>* workspaces,
+                      const std::vector<Eigen::Vector3f>* face_normals) {
   workspaces->resize(omp_get_max_threads());
   // Inside, RasterizeHitMap's own parallel regions run on the calling thread alone.
 #pragma omp parallel for schedule(dynamic, 1)
   for (size_t v = 0; v < views->size(); ++v)
-    RasterizeHitMap(mesh, &(*views)[v], &(*workspaces)[omp_get_thread_num()]);
+    RasterizeHitMap(mesh, &(*views)[v], &(*workspaces)[omp_get_thread_num()], face_normals);
 }
 
 }  // namespace satmesh

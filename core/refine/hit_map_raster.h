@@ -22,12 +22,15 @@ struct RasterWorkspace {
 };
 
 // Fills view->hit_map (hits, points, faces) for the mesh's current vertices, like
-// CastHitMap. Parallel over row bands with OpenMP.
-void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace);
+// CastHitMap, and ray_cos like SetRayCosines when face_normals is not null. Parallel over
+// row bands with OpenMP.
+void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace,
+                     const std::vector<Eigen::Vector3f>* face_normals = nullptr);
 
 // The hit maps of all views, one view per thread (a view alone does not keep two
 // threads busy: every band must scan every face). workspaces: one per thread, resized.
 void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
-                      std::vector<RasterWorkspace>* workspaces);
+                      std::vector<RasterWorkspace>* workspaces,
+                      const std::vector<Eigen::Vector3f>* face_normals = nullptr);
 
 }  // namespace satmesh

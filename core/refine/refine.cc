@@ -55,13 +55,13 @@ struct LevelContext {
 
 // Mean ZNCC over all pair-directions; fills the gradient and per-vertex pair counts.
 // Pair-directions run in parallel (one per thread, gathered per face by each thread's
-// accumulator, scattered to the vertices once at the end).
+// accumulator, scattered to the vertices once at the end). The views' hit maps, with
+// their ray cosines, must be current for the mesh and its face normals.
 double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& slot,
                        const std::vector<std::pair<int, int>>& pairs, const TriangleMesh& mesh,
+                       const std::vector<Eigen::Vector3f>& normals,
                        const PhotometricOptions& options, std::vector<Eigen::Vector3d>* gradient,
                        std::vector<int>* seen) {
-  const auto normals = FaceNormals(mesh);
-  for (auto& v : views) SetRayCosines(normals, &v);
   std::vector<std::pair<int, int>> directions;
   for (const auto& [i, j] : pairs) directions.insert(directions.end(), {{i, j}, {j, i}});
   const bool accumulate = gradient || seen;
@@ -146,17 +146,21 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
     ctx.progress.ThrowIfCancelled();
     const bool last = it == opt.iterations_per_level;
     auto t0 = Clock::now();
+    const auto normals = FaceNormals(*mesh);
     if (opt.rasterize_hit_maps) {
-      RasterizeHitMaps(*mesh, &views, &raster);
+      RasterizeHitMaps(*mesh, &views, &raster, &normals);
     } else {
-      for (auto& v : views) stats.times.intersect_s += CastHitMap(*scene, &v);
+      for (auto& v : views) {
+        stats.times.intersect_s += CastHitMap(*scene, &v);
+        SetRayCosines(normals, &v);
+      }
     }
     stats.times.raycast_s += Seconds(t0);
 
     t0 = Clock::now();
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
     std::fill(seen.begin(), seen.end(), 0);
-    const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, photo,
+    const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, normals, photo,
                                         last ? nullptr : &gradient, last ? nullptr : &seen);
     stats.mean_zncc.push_back(zncc);
     stats.times.gradient_s += Seconds(t0);
@@ -208,9 +212,13 @@ double MeasureMeanZncc(const RefineInput& input, const TriangleMesh& mesh,
   const double gsd = GroundSamplingDistance(input.views[pairs.front().first].rpc, input.frame) *
                      std::ldexp(1.0, level);
   RayScene scene(mesh);
-  for (auto& v : views) CastHitMap(scene, &v);
-  return PhotometricPass(views, slot, pairs, mesh, PhotometricOptionsAt(options, gsd), nullptr,
-                         nullptr);
+  const auto normals = FaceNormals(mesh);
+  for (auto& v : views) {
+    CastHitMap(scene, &v);
+    SetRayCosines(normals, &v);
+  }
+  return PhotometricPass(views, slot, pairs, mesh, normals, PhotometricOptionsAt(options, gsd),
+                         nullptr, nullptr);
 }
 
 RefineResult Refine(const RefineInput& input, const RefineOptions& options,

@@ -40,28 +40,38 @@ ViewLevel MakeViewLevel(int view, int level, ImageF image_level, const RpcModel&
   out.projection = ProjectionGrid(out.rpc, frame, box_min, box_max, /*spacing_xy_m=*/16.0,
                                   /*spacing_z_m=*/8.0);
   const int w = out.image.width, h = out.image.height;
-  out.rays.resize(size_t(w) * h);
+  out.ray_directions.resize(size_t(w) * h);
 #pragma omp parallel for schedule(static)
   for (int row = 0; row < h; ++row)
     for (int col = 0; col < w; ++col)
-      out.rays[size_t(row) * w + col] = out.camera.PixelRay(col + 0.5, row + 0.5);
+      out.ray_directions[size_t(row) * w + col] = out.camera.PixelRay(col + 0.5, row + 0.5).direction;
   return out;
+}
+
+std::vector<Ray> PixelRays(const ViewLevel& view) {
+  const int w = view.width(), h = view.height();
+  std::vector<Ray> rays(size_t(w) * h);
+#pragma omp parallel for schedule(static)
+  for (int row = 0; row < h; ++row)
+    for (int col = 0; col < w; ++col) rays[size_t(row) * w + col] = view.camera.PixelRay(col + 0.5, row + 0.5);
+  return rays;
 }
 
 double CastHitMap(const RayScene& scene, ViewLevel* view) {
   HitMap& map = view->hit_map;
-  const size_t n = view->rays.size();
+  const std::vector<Ray> rays = PixelRays(*view);
+  const size_t n = rays.size();
   map.hits.resize(n);
   map.points.resize(n);
   map.faces.resize(n);
   const auto start = std::chrono::steady_clock::now();
-  scene.IntersectImage(view->rays.data(), view->width(), view->height(), map.hits.data());
+  scene.IntersectImage(rays.data(), view->width(), view->height(), map.hits.data());
   const double intersect_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < long(n); ++i) {
     map.faces[i] = map.hits[i].face;
-    if (map.hits[i].hit()) map.points[i] = view->rays[i].origin + map.hits[i].t * view->rays[i].direction;
+    if (map.hits[i].hit()) map.points[i] = rays[i].origin + map.hits[i].t * rays[i].direction;
   }
   return intersect_s;
 }
@@ -72,7 +82,7 @@ void SetRayCosines(const std::vector<Eigen::Vector3f>& face_normals, ViewLevel* 
 #pragma omp parallel for schedule(static)
   for (long p = 0; p < long(map.hits.size()); ++p) {
     const int face = map.hits[p].face;
-    map.ray_cos[p] = face >= 0 ? view->rays[p].direction.dot(face_normals[face]) : 0.f;
+    map.ray_cos[p] = face >= 0 ? view->ray_directions[p].dot(face_normals[face]) : 0.f;
   }
 }
 

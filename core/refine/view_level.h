@@ -1,6 +1,6 @@
 #pragma once
-// One view at one pyramid level: normalised image, level RPC, virtual camera, the rays
-// of all its pixels (fixed for the level), and the hit map of the current mesh.
+// One view at one pyramid level: normalised image, level RPC, virtual camera, the ray
+// directions of all its pixels (fixed for the level), and the hit map of the current mesh.
 #include <vector>
 
 #include "core/image/image.h"
@@ -28,7 +28,8 @@ struct ViewLevel {
   RpcModel rpc;        // pixel coordinates of this level
   VirtualCamera camera;
   ProjectionGrid projection;  // fast pixel_from_local of this level
-  std::vector<Ray> rays;  // per pixel
+  std::vector<Eigen::Vector3f> ray_directions;  // unit, per pixel (the virtual camera's);
+                                                // rays start on the plane camera.z_high()
   HitMap hit_map;
 
   int width() const { return image.width; }
@@ -46,6 +47,9 @@ void SurfaceBox(const TriangleMesh& mesh, double min_z, double max_z, Eigen::Vec
 ViewLevel MakeViewLevel(int view, int level, ImageF image_level, const RpcModel& rpc_window,
                         const LocalFrame& frame, const Eigen::Vector3d& box_min,
                         const Eigen::Vector3d& box_max, int grid_px);
+
+// The full rays of every pixel (origin on the upper plane), for Embree.
+std::vector<Ray> PixelRays(const ViewLevel& view);
 
 // Casts all rays of the view against the scene (the paper's dominant cost: once per view
 // per iteration, shared by all pairs). Returns the seconds spent in Embree's Intersect.

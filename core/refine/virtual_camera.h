@@ -28,6 +28,7 @@ class VirtualCamera {
   Eigen::Vector3d CentralDirection() const;
 
   int width() const { return width_; }
+  double z_high() const { return z_high_; }  // the rays' origins lie on this plane
   int height() const { return height_; }
 
  private:

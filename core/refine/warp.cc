@@ -16,7 +16,7 @@ inline void WarpPixel(const WarpContext& c, size_t p) {
   const ViewLevel& vj = *c.vj;
   const int face = vi.hit_map.faces[p];
   if (face < 0) return;
-  const Eigen::Vector3f& ray_dir = vi.rays[p].direction;
+  const Eigen::Vector3f& ray_dir = vi.ray_directions[p];
   const float cos_ray = c.cos_i ? c.cos_i[p] : ray_dir.dot((*c.face_normals)[face]);
   if (cos_ray > -c.min_cos) return;  // grazing or back-facing
   const Eigen::Vector3f& X = vi.hit_map.points[p];
@@ -72,7 +72,7 @@ struct RowWarpAvx2 {
   const int* faces_i;       // this row's
   const float* cos_i;
   const float* points_i;    // 3 floats a pixel
-  const float* rays_i;      // 8 floats a Ray, direction at +3
+  const float* rays_i;      // 3 floats a pixel (unit direction)
   const int* faces_j;
   const float* points_j;
   const float* image_j;
@@ -89,7 +89,7 @@ struct RowWarpAvx2 {
     faces_i = vi.hit_map.faces.data() + base;
     cos_i = c.cos_i + base;
     points_i = vi.hit_map.points[base].data();
-    rays_i = vi.rays[base].direction.data();
+    rays_i = vi.ray_directions[base].data();
     faces_j = vj.hit_map.faces.data();
     points_j = vj.hit_map.points.data()->data();
     image_j = vj.image.pixels.data();
@@ -183,9 +183,8 @@ struct RowWarpAvx2 {
     const __m256 db_dx = _mm256_fmadd_ps(fy, _mm256_sub_ps(dx_bottom, dx_top), dx_top);
     const __m256 db_dy = _mm256_sub_ps(bottom, top);
     // DΠ_j along view i's ray.
-    const __m256i ray_index = _mm256_slli_epi32(pixel, 3);
     __m256 ray[3];
-    for (int a = 0; a < 3; ++a) ray[a] = Gather(rays_i + a, ray_index, used);
+    for (int a = 0; a < 3; ++a) ray[a] = Gather(rays_i + a, idx3, used);
     const __m256 dx_dt =
         _mm256_fmadd_ps(J[2], ray[2], _mm256_fmadd_ps(J[1], ray[1], _mm256_mul_ps(J[0], ray[0])));
     const __m256 dy_dt =

@@ -183,9 +183,9 @@ BENCHMARK(BM_ComputeZnccField)->ArgName("radius")->Arg(2)->Arg(3)->Unit(benchmar
 
 void BM_RaySceneIntersect1M(benchmark::State& state) {
   const RayScene scene(CityMesh());
-  const ViewLevel view = MakeView(0, 20, 30);  // 1024² rays
-  std::vector<RayHit> hits(view.rays.size());
-  for (auto _ : state) scene.Intersect(view.rays.data(), hits.data(), hits.size());
+  const std::vector<Ray> rays = PixelRays(MakeView(0, 20, 30));  // 1024² rays
+  std::vector<RayHit> hits(rays.size());
+  for (auto _ : state) scene.Intersect(rays.data(), hits.data(), hits.size());
   state.SetItemsProcessed(state.iterations() * hits.size());
 }
 BENCHMARK(BM_RaySceneIntersect1M)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
@@ -210,7 +210,7 @@ void BM_CastHitMap(benchmark::State& state) {
   const RayScene scene(CityMesh());
   ViewLevel view = MakeView(0, 20, 30);
   for (auto _ : state) CastHitMap(scene, &view);
-  state.SetItemsProcessed(state.iterations() * view.rays.size());
+  state.SetItemsProcessed(state.iterations() * view.ray_directions.size());
 }
 BENCHMARK(BM_CastHitMap)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
@@ -218,7 +218,7 @@ void BM_RasterizeHitMap(benchmark::State& state) {  // the same hit map without 
   ViewLevel view = MakeView(0, 20, 30);
   RasterWorkspace workspace;
   for (auto _ : state) RasterizeHitMap(CityMesh(), &view, &workspace);
-  state.SetItemsProcessed(state.iterations() * view.rays.size());
+  state.SetItemsProcessed(state.iterations() * view.ray_directions.size());
 }
 BENCHMARK(BM_RasterizeHitMap)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
@@ -227,7 +227,7 @@ void BM_RasterizeHitMaps4Views(benchmark::State& state) {  // one view per threa
   for (int v = 0; v < 4; ++v) views.push_back(MakeView(v, 15 + 5 * v, 30 + 60 * v));
   std::vector<RasterWorkspace> workspaces;
   for (auto _ : state) RasterizeHitMaps(CityMesh(), &views, &workspaces);
-  state.SetItemsProcessed(state.iterations() * 4 * views[0].rays.size());
+  state.SetItemsProcessed(state.iterations() * 4 * views[0].ray_directions.size());
 }
 BENCHMARK(BM_RasterizeHitMaps4Views)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
@@ -251,7 +251,7 @@ void BM_AccumulatePhotometricGradient(benchmark::State& state) {  // one pair-di
   for (auto _ : state)
     benchmark::DoNotOptimize(AccumulatePhotometricGradient(view_i, view_j, mesh, normals, options,
                                                            &gradient, &touched, &workspace));
-  state.SetItemsProcessed(state.iterations() * view_i.rays.size());
+  state.SetItemsProcessed(state.iterations() * view_i.ray_directions.size());
 }
 BENCHMARK(BM_AccumulatePhotometricGradient)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
