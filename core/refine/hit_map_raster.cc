@@ -54,7 +54,7 @@ void RasterizeBand(const TriangleMesh& mesh, const RasterWorkspace& ws, int widt
     const int r1 = std::min(row_end - 1, FloorInt(std::min(max_y, double(row_end)) - 0.5));
     const int c0 = std::max(0, CeilInt(std::max(min_x, -1.0) - 0.5));
     const int c1 = std::min(width - 1, FloorInt(std::min(max_x, double(width)) - 0.5));
-    if (r0 > r1 || c0 > c1) continue;  // no pixel centre in the box (~1 face in 3 here)
+    if (r0 > r1 || c0 > c1) continue;  // no pixel centre in the box (small faces)
     const float d0 = ws.vertex_depth[face[0]], d1 = ws.vertex_depth[face[1]],
                 d2 = ws.vertex_depth[face[2]];
     const Edge e0 = MakeEdge(px, face[1], face[2]);  // weight of vertex 0

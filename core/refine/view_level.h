@@ -17,7 +17,8 @@ struct HitMap {
   std::vector<Eigen::Vector3f> points;  // hit points (frame), valid where hits[i].hit()
   std::vector<int> faces;               // hits[i].face again, 4 bytes a pixel: other views'
                                         // visibility lookups land at random pixels
-  std::vector<float> ray_cos;           // ray · face normal per hit pixel (SetRayCosines);
+  std::vector<float> ray_cos;           // ray · face normal per hit pixel (SetRayCosines, or
+                                        // the rasterizer given the normals);
                                         // shared by all pair-directions from this view
 };
 
