@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "core/common/simd.h"
+
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #define SATMESH_HAVE_AVX2_WARP 1
@@ -46,6 +48,8 @@ inline void WarpPixel(const WarpContext& c, size_t p) {
   c.valid[p] = 1;
 }
 
+// (The AVX2 clone gets VEX code and roundsd for the lattice's floors.)
+SATMESH_AVX2_CLONE
 void WarpRowScalar(const WarpContext& c, int row, int col_begin, int col_end) {
   const size_t base = size_t(row) * c.vi->width();
   for (int col = col_begin; col < col_end; ++col) WarpPixel(c, base + col);
