@@ -204,11 +204,12 @@ struct RowWarpAvx2 {
   }
 };
 
-// 8 pixels at a time from col_begin; returns the first column left for the scalar path.
-SATMESH_AVX2 int WarpRowAvx2(const WarpContext& c, int row, int col_begin, int col_end) {
+// 8 pixels at a time; returns the first column left for the scalar path (the last < 8).
+SATMESH_AVX2 int WarpRowAvx2(const WarpContext& c, int row) {
   const RowWarpAvx2 warp(c, row);
-  int col = col_begin;
-  for (; col + 8 <= col_end; col += 8) {
+  const int width = c.vi->width();
+  int col = 0;
+  for (; col + 8 <= width; col += 8) {
     int outside = warp.Group(col);
     for (; outside; outside &= outside - 1) WarpPixel(c, warp.base + col + __builtin_ctz(outside));
   }
@@ -233,7 +234,7 @@ void WarpRow(const WarpContext& c, int row, bool vectorized) {
   int col = 0;
   const int width = c.vi->width();
 #ifdef SATMESH_HAVE_AVX2_WARP
-  if (vectorized && c.cos_i && WarpHasAvx2()) col = WarpRowAvx2(c, row, 0, width);
+  if (vectorized && c.cos_i && WarpHasAvx2()) col = WarpRowAvx2(c, row);
 #endif
   WarpRowScalar(c, row, col, width);
 }
