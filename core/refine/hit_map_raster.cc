@@ -120,7 +120,7 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
   for (long p = 0; p < long(n); ++p) {
     RayHit& hit = map.hits[p];
     map.faces[p] = hit.face;
-    if (face_normals) map.ray_cos[p] = 0.f;
+    if (face_normals) map.ray_cos[p] = RayCosine(view->ray_directions[p], hit.face, *face_normals);
     if (!hit.hit()) continue;
     const Eigen::Vector3i& f = mesh.faces[hit.face];
     const Eigen::Vector3f& p0 = mesh.vertices[f[0]];
@@ -129,7 +129,6 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
     const Eigen::Vector3f& direction = view->ray_directions[p];
     hit.t = (X.z() - z_high) / direction.z();
     map.points[p] = X;
-    if (face_normals) map.ray_cos[p] = direction.dot((*face_normals)[hit.face]);
   }
 }
 

@@ -22,7 +22,7 @@ struct RasterWorkspace {
 };
 
 // Fills view->hit_map (hits, points, faces) for the mesh's current vertices, like
-// CastHitMap, and ray_cos like SetRayCosines when face_normals is not null. Parallel over
+// CastHitMap, and ray_cos too when face_normals is not null. Parallel over
 // row bands with OpenMP.
 void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace,
                      const std::vector<Eigen::Vector3f>* face_normals = nullptr);

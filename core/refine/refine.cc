@@ -151,8 +151,7 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
       RasterizeHitMaps(*mesh, &views, &raster, &normals);
     } else {
       for (auto& v : views) {
-        stats.times.intersect_s += CastHitMap(*scene, &v);
-        SetRayCosines(normals, &v);
+        stats.times.intersect_s += CastHitMap(*scene, &v, &normals);
       }
     }
     stats.times.raycast_s += Seconds(t0);
@@ -213,10 +212,7 @@ double MeasureMeanZncc(const RefineInput& input, const TriangleMesh& mesh,
                      std::ldexp(1.0, level);
   RayScene scene(mesh);
   const auto normals = FaceNormals(mesh);
-  for (auto& v : views) {
-    CastHitMap(scene, &v);
-    SetRayCosines(normals, &v);
-  }
+  for (auto& v : views) CastHitMap(scene, &v, &normals);
   return PhotometricPass(views, slot, pairs, mesh, normals, PhotometricOptionsAt(options, gsd),
                          nullptr, nullptr);
 }

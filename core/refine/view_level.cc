@@ -57,13 +57,15 @@ std::vector<Ray> PixelRays(const ViewLevel& view) {
   return rays;
 }
 
-double CastHitMap(const RayScene& scene, ViewLevel* view) {
+double CastHitMap(const RayScene& scene, ViewLevel* view,
+                  const std::vector<Eigen::Vector3f>* face_normals) {
   HitMap& map = view->hit_map;
   const std::vector<Ray> rays = PixelRays(*view);
   const size_t n = rays.size();
   map.hits.resize(n);
   map.points.resize(n);
   map.faces.resize(n);
+  if (face_normals) map.ray_cos.resize(n);
   const auto start = std::chrono::steady_clock::now();
   scene.IntersectImage(rays.data(), view->width(), view->height(), map.hits.data());
   const double intersect_s =
@@ -72,18 +74,9 @@ double CastHitMap(const RayScene& scene, ViewLevel* view) {
   for (long i = 0; i < long(n); ++i) {
     map.faces[i] = map.hits[i].face;
     if (map.hits[i].hit()) map.points[i] = rays[i].origin + map.hits[i].t * rays[i].direction;
+    if (face_normals) map.ray_cos[i] = RayCosine(rays[i].direction, map.hits[i].face, *face_normals);
   }
   return intersect_s;
-}
-
-void SetRayCosines(const std::vector<Eigen::Vector3f>& face_normals, ViewLevel* view) {
-  HitMap& map = view->hit_map;
-  map.ray_cos.resize(map.hits.size());
-#pragma omp parallel for schedule(static)
-  for (long p = 0; p < long(map.hits.size()); ++p) {
-    const int face = map.hits[p].face;
-    map.ray_cos[p] = face >= 0 ? view->ray_directions[p].dot(face_normals[face]) : 0.f;
-  }
 }
 
 }  // namespace satmesh

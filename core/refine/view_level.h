@@ -17,8 +17,8 @@ struct HitMap {
   std::vector<Eigen::Vector3f> points;  // hit points (frame), valid where hits[i].hit()
   std::vector<int> faces;               // hits[i].face again, 4 bytes a pixel: other views'
                                         // visibility lookups land at random pixels
-  std::vector<float> ray_cos;           // ray · face normal per hit pixel (SetRayCosines, or
-                                        // the rasterizer given the normals);
+  std::vector<float> ray_cos;           // ray · face normal per hit pixel (RayCosine; filled
+                                        // by CastHitMap / RasterizeHitMap given the normals);
                                         // shared by all pair-directions from this view
 };
 
@@ -53,11 +53,16 @@ ViewLevel MakeViewLevel(int view, int level, ImageF image_level, const RpcModel&
 std::vector<Ray> PixelRays(const ViewLevel& view);
 
 // Casts all rays of the view against the scene (the paper's dominant cost: once per view
-// per iteration, shared by all pairs). Returns the seconds spent in Embree's Intersect.
-double CastHitMap(const RayScene& scene, ViewLevel* view);
+// per iteration, shared by all pairs), and fills ray_cos when face_normals is not null
+// (one random normal read per pixel per iteration instead of one per pair-direction).
+// Returns the seconds spent in Embree's Intersect.
+double CastHitMap(const RayScene& scene, ViewLevel* view,
+                  const std::vector<Eigen::Vector3f>* face_normals = nullptr);
 
-// Fills view->hit_map.ray_cos for the current face normals (one random normal read per
-// pixel per iteration instead of one per pair-direction).
-void SetRayCosines(const std::vector<Eigen::Vector3f>& face_normals, ViewLevel* view);
+// hit_map.ray_cos of a pixel: ray · face normal where it hits, 0 where it misses.
+inline float RayCosine(const Eigen::Vector3f& ray_direction, int face,
+                       const std::vector<Eigen::Vector3f>& face_normals) {
+  return face >= 0 ? ray_direction.dot(face_normals[face]) : 0.f;
+}
 
 }  // namespace satmesh

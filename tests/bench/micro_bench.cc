@@ -268,11 +268,10 @@ BENCHMARK(BM_RasterizeHitMapRefinement)->Unit(benchmark::kMillisecond)->UseRealT
 void BM_PairDirectionRefinement(benchmark::State& state) {
   const TriangleMesh& mesh = RefinementMesh();
   ViewLevel view_i = MakeView(0, 20, 30), view_j = MakeView(1, 15, 200, /*rotation=*/160);
-  RasterWorkspace raster;
-  RasterizeHitMap(mesh, &view_i, &raster);
-  RasterizeHitMap(mesh, &view_j, &raster);
   const auto normals = FaceNormals(mesh);
-  SetRayCosines(normals, &view_i);
+  RasterWorkspace raster;
+  RasterizeHitMap(mesh, &view_i, &raster, &normals);
+  RasterizeHitMap(mesh, &view_j, &raster, &normals);
   PhotometricOptions options;
   options.visibility_tolerance_m = 2 * kGsdM;
   GradientAccumulator accumulator;

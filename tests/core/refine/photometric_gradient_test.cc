@@ -37,10 +37,7 @@ double Energy(TwoViews& s, const TriangleMesh& mesh, std::vector<Eigen::Vector3d
               long* valid_pixels = nullptr) {
   RayScene scene(mesh);
   const auto normals = FaceNormals(mesh);
-  for (auto& v : s.views) {
-    CastHitMap(scene, &v);
-    SetRayCosines(normals, &v);
-  }
+  for (auto& v : s.views) CastHitMap(scene, &v, &normals);
   double e = 0;
   for (int d = 0; d < 2; ++d) {
     const PairEnergy pair = AccumulatePhotometricGradient(s.views[d], s.views[1 - d], mesh, normals,
