@@ -6,6 +6,9 @@
 #include <cmath>
 #include <limits>
 
+#include "core/refine/lattice_avx2.h"
+#include "core/refine/warp.h"
+
 namespace satmesh {
 namespace {
 
@@ -64,20 +67,103 @@ void RasterizeBand(const TriangleMesh& mesh, const RasterWorkspace& ws, int widt
     const double area = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
     if (area == 0) continue;  // edge-on
     const double sign = area > 0 ? 1.0 : -1.0, inv_area = 1.0 / area;
+    // The pixel centre (row, col), known to be inside: depth test and write.
+    auto draw = [&](int row, int col, double w1, double w2) {
+      const float u = float(w1 * inv_area), v = float(w2 * inv_area);
+      const float z = d0 + u * (d1 - d0) + v * (d2 - d0);
+      const size_t p = size_t(row) * width + col;
+      if (!(z < depth[p])) return;
+      depth[p] = z;
+      (*hits)[p] = RayHit{int(f), 0.f, u, v};
+    };
+    if (r1 - r0 <= 1 && c1 - c0 <= 1) {
+      // At most 2 x 2 pixel centres (nearly every face at the refinement's resolution):
+      // the four are tested without branches, then only the inside ones are drawn.
+      unsigned inside = 0;
+      for (int k = 0; k < 4; ++k) {
+        const int row = r0 + (k >> 1), col = c0 + (k & 1);
+        const double x = col + 0.5, y = row + 0.5;
+        inside |= unsigned((row <= r1) & (col <= c1) & (sign * e0(x, y) >= 0) &
+                           (sign * e1(x, y) >= 0) & (sign * e2(x, y) >= 0))
+                  << k;
+      }
+      for (; inside; inside &= inside - 1) {
+        const int k = __builtin_ctz(inside);
+        const int row = r0 + (k >> 1), col = c0 + (k & 1);
+        draw(row, col, e1(col + 0.5, row + 0.5), e2(col + 0.5, row + 0.5));
+      }
+      continue;
+    }
     for (int row = r0; row <= r1; ++row) {
       const double y = row + 0.5;
       for (int col = c0; col <= c1; ++col) {
         const double x = col + 0.5;
         const double w0 = e0(x, y), w1 = e1(x, y), w2 = e2(x, y);
-        if (!((sign * w0 >= 0) & (sign * w1 >= 0) & (sign * w2 >= 0))) continue;
-        const float u = float(w1 * inv_area), v = float(w2 * inv_area);
-        const float z = d0 + u * (d1 - d0) + v * (d2 - d0);
-        const size_t p = size_t(row) * width + col;
-        if (!(z < depth[p])) continue;
-        depth[p] = z;
-        (*hits)[p] = RayHit{int(f), 0.f, u, v};
+        if ((sign * w0 >= 0) & (sign * w1 >= 0) & (sign * w2 >= 0)) draw(row, col, w1, w2);
       }
     }
+  }
+}
+
+// The vertex's pixel through the double lattice (exact RPC outside it) and its depth.
+inline void ProjectVertex(const ViewLevel& view, const Eigen::Vector3f& along,
+                          const Eigen::Vector3f& p, Eigen::Vector2d* pixel, float* depth) {
+  Eigen::Matrix<double, 2, 3> unused;
+  *pixel = p.allFinite() ? view.projection.PixelFromLocal(p.cast<double>(), &unused)
+                         : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  *depth = along.dot(p);
+}
+
+#ifdef SATMESH_HAVE_AVX2_LATTICE
+// Vertices [0, n - n % 8) 8 at a time through the float lattice; the lanes outside it
+// (and non-finite vertices) take ProjectVertex.
+SATMESH_AVX2 void ProjectVerticesAvx2(const std::vector<Eigen::Vector3f>& vertices,
+                                      const ViewLevel& view, const Eigen::Vector3f& along,
+                                      long begin, long end, Eigen::Vector2d* pixels, float* depth) {
+  const LatticeAvx2 lattice(view.projection);
+  const __m256 all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+  for (long v = begin; v < end; v += 8) {
+    __m256 X[3], x, y, J[6];
+    LoadPoints3(vertices[v].data(), &X[0], &X[1], &X[2]);
+    const __m256 inside = lattice.Project(X, all, &x, &y, J);
+    const __m256 d = _mm256_fmadd_ps(X[2], _mm256_set1_ps(along.z()),
+                                     _mm256_fmadd_ps(X[1], _mm256_set1_ps(along.y()),
+                                                     _mm256_mul_ps(X[0], _mm256_set1_ps(along.x()))));
+    _mm256_storeu_ps(depth + v, d);
+    alignas(32) float xs[8], ys[8];
+    _mm256_store_ps(xs, x);
+    _mm256_store_ps(ys, y);
+    const int in = _mm256_movemask_ps(inside);
+    for (int k = 0; k < 8; ++k) {
+      if (in >> k & 1)
+        pixels[v + k] = Eigen::Vector2d(xs[k], ys[k]);
+      else
+        ProjectVertex(view, along, vertices[v + k], &pixels[v + k], &depth[v + k]);
+    }
+  }
+}
+#endif
+
+// Every vertex's pixel and depth, in parallel.
+void ProjectVertices(const TriangleMesh& mesh, const ViewLevel& view, const Eigen::Vector3f& along,
+                     RasterWorkspace* ws) {
+  const long nv = long(mesh.vertices.size());
+  ws->pixels.resize(nv);
+  ws->vertex_depth.resize(nv);
+  constexpr long kChunk = 4096;  // a multiple of 8
+#pragma omp parallel for schedule(static)
+  for (long begin = 0; begin < nv; begin += kChunk) {
+    const long end = std::min(nv, begin + kChunk);
+    long v = begin;
+#ifdef SATMESH_HAVE_AVX2_LATTICE
+    if (WarpHasAvx2()) {
+      v = begin + (end - begin) / 8 * 8;
+      ProjectVerticesAvx2(mesh.vertices, view, along, begin, v, ws->pixels.data(),
+                          ws->vertex_depth.data());
+    }
+#endif
+    for (; v < end; ++v)
+      ProjectVertex(view, along, mesh.vertices[v], &ws->pixels[v], &ws->vertex_depth[v]);
   }
 }
 
@@ -94,18 +180,7 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
   map.faces.resize(n);
   if (face_normals) map.ray_cos.resize(n);
   ws.depth.assign(n, std::numeric_limits<float>::infinity());
-  const Eigen::Vector3f along = MeanRayDirection(*view);
-  const size_t nv = mesh.vertices.size();
-  ws.pixels.resize(nv);
-  ws.vertex_depth.resize(nv);
-#pragma omp parallel for schedule(static)
-  for (long v = 0; v < long(nv); ++v) {
-    const Eigen::Vector3f& p = mesh.vertices[v];
-    Eigen::Matrix<double, 2, 3> unused;
-    ws.pixels[v] = p.allFinite() ? view->projection.PixelFromLocal(p.cast<double>(), &unused)
-                                 : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
-    ws.vertex_depth[v] = along.dot(p);
-  }
+  ProjectVertices(mesh, *view, MeanRayDirection(*view), &ws);
 #pragma omp parallel
   {
     // One band of rows per thread; every thread scans all faces (a cheap bounds test).

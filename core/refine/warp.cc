@@ -4,10 +4,7 @@
 
 #include "core/common/simd.h"
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#define SATMESH_HAVE_AVX2_WARP 1
-#endif
+#include "core/refine/lattice_avx2.h"
 
 namespace satmesh {
 namespace {
@@ -55,96 +52,13 @@ void WarpRowScalar(const WarpContext& c, int row, int col_begin, int col_end) {
   for (int col = col_begin; col < col_end; ++col) WarpPixel(c, base + col);
 }
 
-#ifdef SATMESH_HAVE_AVX2_WARP
-
-#define SATMESH_AVX2 __attribute__((target("avx2,fma,bmi2")))
-
-// Lane loads without vgatherdps: with the gather-data-sampling microcode (Skylake to
-// Ice Lake servers, this project's benchmark machine) one 8-lane gather costs ~28 cycles,
-// 8 scalar loads and inserts ~10 (BENCHMARKS.md, session 5). Lanes off the mask read
-// base[0] and give 0.
-SATMESH_AVX2 inline void LaneIndices(__m256i index, __m256 mask, int* out) {
-  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out),
-                      _mm256_and_si256(index, _mm256_castps_si256(mask)));
-}
-SATMESH_AVX2 inline __m256 Gather(const float* base, __m256i index, __m256 mask) {
-  int i[8];
-  LaneIndices(index, mask, i);
-  const __m256 v = _mm256_setr_ps(base[i[0]], base[i[1]], base[i[2]], base[i[3]], base[i[4]],
-                                  base[i[5]], base[i[6]], base[i[7]]);
-  return _mm256_and_ps(v, mask);
-}
-SATMESH_AVX2 inline __m256i GatherInt(const int* base, __m256i index, __m256i mask, __m256i fill) {
-  int i[8];
-  LaneIndices(index, _mm256_castsi256_ps(mask), i);
-  const __m256i v = _mm256_setr_epi32(base[i[0]], base[i[1]], base[i[2]], base[i[3]], base[i[4]],
-                                      base[i[5]], base[i[6]], base[i[7]]);
-  return _mm256_blendv_epi8(fill, v, mask);
-}
-
-// x, y, z of 8 consecutive 3-float points (24 floats from p) as three vectors.
-SATMESH_AVX2 inline void LoadPoints3(const float* p, __m256* x, __m256* y, __m256* z) {
-  const __m256 m03 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p)), _mm_loadu_ps(p + 12), 1);
-  const __m256 m14 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 4)), _mm_loadu_ps(p + 16), 1);
-  const __m256 m25 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 8)), _mm_loadu_ps(p + 20), 1);
-  const __m256 xy = _mm256_shuffle_ps(m14, m25, _MM_SHUFFLE(2, 1, 3, 2));
-  const __m256 yz = _mm256_shuffle_ps(m03, m14, _MM_SHUFFLE(1, 0, 2, 1));
-  *x = _mm256_shuffle_ps(m03, xy, _MM_SHUFFLE(2, 0, 3, 0));
-  *y = _mm256_shuffle_ps(yz, xy, _MM_SHUFFLE(3, 1, 2, 0));
-  *z = _mm256_shuffle_ps(yz, m25, _MM_SHUFFLE(3, 0, 3, 1));
-}
-
-// The 8 floats at base + 8 * index[k] for each lane k, transposed: out[m] holds float m of
-// every lane's record (lanes off the mask read record 0).
-SATMESH_AVX2 inline void GatherRecords8(const float* base, __m256i index, __m256 mask, __m256* out) {
-  int i[8];
-  LaneIndices(index, mask, i);
-  __m256 r[8];
-  for (int k = 0; k < 8; ++k) r[k] = _mm256_loadu_ps(base + 8 * size_t(i[k]));
-  const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
-  const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
-  const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
-  const __m256 t6 = _mm256_unpacklo_ps(r[6], r[7]), t7 = _mm256_unpackhi_ps(r[6], r[7]);
-  const __m256 s0 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-  const __m256 s1 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-  const __m256 s2 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
-  const __m256 s3 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
-  const __m256 s4 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(1, 0, 1, 0));
-  const __m256 s5 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(3, 2, 3, 2));
-  const __m256 s6 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(1, 0, 1, 0));
-  const __m256 s7 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(3, 2, 3, 2));
-  out[0] = _mm256_permute2f128_ps(s0, s4, 0x20);
-  out[1] = _mm256_permute2f128_ps(s1, s5, 0x20);
-  out[2] = _mm256_permute2f128_ps(s2, s6, 0x20);
-  out[3] = _mm256_permute2f128_ps(s3, s7, 0x20);
-  out[4] = _mm256_permute2f128_ps(s0, s4, 0x31);
-  out[5] = _mm256_permute2f128_ps(s1, s5, 0x31);
-  out[6] = _mm256_permute2f128_ps(s2, s6, 0x31);
-  out[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
-}
-
-// The two adjacent floats at base + index[k] (and + 1) of each lane, as (first, second).
-SATMESH_AVX2 inline void GatherPairs(const float* base, __m256i index, __m256 mask, __m256* first,
-                                     __m256* second) {
-  int i[8];
-  LaneIndices(index, mask, i);
-  auto pair = [&](__m128 v, int k, bool high) {
-    const __m64* q = reinterpret_cast<const __m64*>(base + i[k]);
-    return high ? _mm_loadh_pi(v, q) : _mm_loadl_pi(v, q);
-  };
-  const __m128 z = _mm_setzero_ps();
-  const __m256 a = _mm256_set_m128(pair(pair(z, 4, false), 5, true), pair(pair(z, 0, false), 1, true));
-  const __m256 b = _mm256_set_m128(pair(pair(z, 6, false), 7, true), pair(pair(z, 2, false), 3, true));
-  *first = _mm256_and_ps(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0)), mask);
-  *second = _mm256_and_ps(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1)), mask);
-}
+#ifdef SATMESH_HAVE_AVX2_LATTICE
 
 // One row of view i, 8 pixels at a time.
 struct RowWarpAvx2 {
   const WarpContext& c;
   size_t base;              // first pixel of the row
   int wj;
-  const float* cells;       // j's float lattice, 8 floats a cell
   const int* faces_i;       // this row's
   const float* cos_i;
   const float* points_i;    // 3 floats a pixel
@@ -152,16 +66,14 @@ struct RowWarpAvx2 {
   const int* faces_j;
   const float* points_j;
   const float* image_j;
-  __m256 origin[3], inv_spacing[3], spacing[3], n_cells[3];
-  __m256i nx, ny;
+  LatticeAvx2 lattice_j;
 
-  SATMESH_AVX2 RowWarpAvx2(const WarpContext& context, int row) : c(context) {
+  SATMESH_AVX2 RowWarpAvx2(const WarpContext& context, int row)
+      : c(context), lattice_j(context.vj->projection) {
     const ViewLevel& vi = *c.vi;
     const ViewLevel& vj = *c.vj;
     wj = vj.width();
     base = size_t(row) * vi.width();
-    const ProjectionGrid::FloatLattice lat = vj.projection.float_lattice();
-    cells = &lat.cells[0].pixel[0];
     faces_i = vi.hit_map.faces.data() + base;
     cos_i = c.cos_i + base;
     points_i = vi.hit_map.points[base].data();
@@ -169,14 +81,6 @@ struct RowWarpAvx2 {
     faces_j = vj.hit_map.faces.data();
     points_j = vj.hit_map.points.data()->data();
     image_j = vj.image.pixels.data();
-    for (int a = 0; a < 3; ++a) {
-      origin[a] = _mm256_set1_ps(lat.origin[a]);
-      inv_spacing[a] = _mm256_set1_ps(lat.inv_spacing[a]);
-      spacing[a] = _mm256_set1_ps(lat.spacing[a]);
-      n_cells[a] = _mm256_set1_ps(float(lat.n[a]));
-    }
-    nx = _mm256_set1_epi32(lat.n[0]);
-    ny = _mm256_set1_epi32(lat.n[1]);
   }
 
   // Pixels [col, col + 8): writes b, db_dn and valid of all 8. Returns the lanes (bits)
@@ -191,32 +95,12 @@ struct RowWarpAvx2 {
     const __m256 facing =
         _mm256_and_ps(hit, _mm256_cmp_ps(cos_ray, _mm256_set1_ps(-c.min_cos), _CMP_LE_OQ));
     if (_mm256_testz_ps(facing, facing)) return 0;
-    // X, and its lattice cell in j.
-    __m256 X[3], g[3], cell_f[3];
-    __m256 in_lattice = facing;
+    // X, and its pixel in j.
+    __m256 X[3], xj, yj, J[6];
     LoadPoints3(points_i + 3 * size_t(col), &X[0], &X[1], &X[2]);
-    for (int a = 0; a < 3; ++a) {
-      g[a] = _mm256_mul_ps(_mm256_sub_ps(X[a], origin[a]), inv_spacing[a]);
-      cell_f[a] = _mm256_floor_ps(g[a]);
-      in_lattice = _mm256_and_ps(in_lattice, _mm256_and_ps(_mm256_cmp_ps(g[a], zero, _CMP_GE_OQ),
-                                                           _mm256_cmp_ps(g[a], n_cells[a], _CMP_LT_OQ)));
-    }
+    const __m256 in_lattice = lattice_j.Project(X, facing, &xj, &yj, J);
     const int outside = _mm256_movemask_ps(_mm256_andnot_ps(in_lattice, facing));
     if (_mm256_testz_ps(in_lattice, in_lattice)) return outside;
-    const __m256i cell = _mm256_add_epi32(
-        _mm256_mullo_epi32(_mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(cell_f[2]), ny),
-                                            _mm256_cvttps_epi32(cell_f[1])),
-                           nx),
-        _mm256_cvttps_epi32(cell_f[0]));
-    __m256 d[3], record[8];
-    for (int a = 0; a < 3; ++a)
-      d[a] = _mm256_mul_ps(_mm256_sub_ps(g[a], _mm256_add_ps(cell_f[a], half)), spacing[a]);
-    GatherRecords8(cells, cell, in_lattice, record);  // pixel (2), Jacobian (6)
-    const __m256* J = record + 2;
-    const __m256 xj = _mm256_fmadd_ps(J[2], d[2], _mm256_fmadd_ps(J[1], d[1],
-                      _mm256_fmadd_ps(J[0], d[0], record[0])));
-    const __m256 yj = _mm256_fmadd_ps(J[5], d[2], _mm256_fmadd_ps(J[4], d[1],
-                      _mm256_fmadd_ps(J[3], d[0], record[1])));
     const __m256 max_x = _mm256_set1_ps(float(wj - 1)), max_y = _mm256_set1_ps(float(c.vj->height() - 1));
     const __m256 inside = _mm256_and_ps(
         in_lattice, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(xj, one, _CMP_GE_OQ),
@@ -288,12 +172,12 @@ SATMESH_AVX2 int WarpRowAvx2(const WarpContext& c, int row) {
   return col;
 }
 
-#endif  // SATMESH_HAVE_AVX2_WARP
+#endif  // SATMESH_HAVE_AVX2_LATTICE
 
 }  // namespace
 
 bool WarpHasAvx2() {
-#ifdef SATMESH_HAVE_AVX2_WARP
+#ifdef SATMESH_HAVE_AVX2_LATTICE
   static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
                           __builtin_cpu_supports("bmi2");
   return has;
@@ -305,7 +189,7 @@ bool WarpHasAvx2() {
 void WarpRow(const WarpContext& c, int row, bool vectorized) {
   int col = 0;
   const int width = c.vi->width();
-#ifdef SATMESH_HAVE_AVX2_WARP
+#ifdef SATMESH_HAVE_AVX2_LATTICE
   if (vectorized && c.cos_i && WarpHasAvx2()) col = WarpRowAvx2(c, row);
 #endif
   WarpRowScalar(c, row, col, width);
