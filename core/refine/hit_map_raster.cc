@@ -12,21 +12,20 @@
 namespace satmesh {
 namespace {
 
-// Edge function e(p) = A x + B y + C of the directed edge s -> t: twice the signed area
-// of (s, t, p). The coefficients come from the lower vertex index first, so the two
-// triangles of an edge evaluate the same numbers (with opposite signs): a pixel centre
-// on the edge is inside one of them or both, never neither.
+// Edge function of the directed edge s -> t: twice the signed area of (s, t, p). It is
+// computed from the lower vertex index first, so the two triangles of an edge evaluate
+// the same numbers (with opposite signs) and a pixel centre on the edge is inside one of
+// them or both, never neither. (This holds exactly between faces rasterized by the same
+// path; between the AVX2 path, in float, and this one, in double, to ~1e-6 px.)
 struct Edge {
-  double A, B, C;
-  double operator()(double x, double y) const { return A * x + B * y + C; }
+  double A, B, ax, ay, sign;
+  double operator()(double x, double y) const { return sign * (A * (x - ax) + B * (y - ay)); }
 };
-inline Edge MakeEdge(const Eigen::Vector2d* pixels, int s, int t) {
+inline Edge MakeEdge(const RasterVertex* v, int s, int t) {
   const bool swap = s > t;
-  const Eigen::Vector2d& a = pixels[swap ? t : s];
-  const Eigen::Vector2d& b = pixels[swap ? s : t];
-  const double A = a.y() - b.y(), B = b.x() - a.x();
-  const double C = -(A * a.x() + B * a.y());
-  return swap ? Edge{-A, -B, -C} : Edge{A, B, C};
+  const RasterVertex& a = v[swap ? t : s];
+  const RasterVertex& b = v[swap ? s : t];
+  return Edge{double(a.y) - b.y, double(b.x) - a.x, a.x, a.y, swap ? -1.0 : 1.0};
 }
 
 // floor and ceil of finite values in int range, without libm calls (no SSE4.1 in the
@@ -40,86 +39,189 @@ Eigen::Vector3f MeanRayDirection(const ViewLevel& view) {
   return view.ray_directions[centre].normalized();
 }
 
-// Rasterizes every face into rows [row_begin, row_end): face id, barycentrics and depth
-// of the nearest face per pixel centre.
-void RasterizeBand(const TriangleMesh& mesh, const RasterWorkspace& ws, int width, int row_begin,
-                   int row_end, std::vector<RayHit>* hits, float* depth) {
-  const Eigen::Vector2d* px = ws.pixels.data();
-  for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    const Eigen::Vector3i& face = mesh.faces[f];
-    const Eigen::Vector2d &a = px[face[0]], &b = px[face[1]], &c = px[face[2]];
-    const double min_y = std::min({a.y(), b.y(), c.y()}), max_y = std::max({a.y(), b.y(), c.y()});
-    // Rows whose centre (row + 0.5) lies in [min_y, max_y]; NaN fails both tests.
-    if (!(max_y >= row_begin + 0.5 && min_y <= row_end - 0.5)) continue;
-    const double min_x = std::min({a.x(), b.x(), c.x()}), max_x = std::max({a.x(), b.x(), c.x()});
-    if (!(max_x >= 0.5 && min_x <= width - 0.5)) continue;
-    const int r0 = std::max(row_begin, CeilInt(std::max(min_y, -1.0) - 0.5));
-    const int r1 = std::min(row_end - 1, FloorInt(std::min(max_y, double(row_end)) - 0.5));
-    const int c0 = std::max(0, CeilInt(std::max(min_x, -1.0) - 0.5));
-    const int c1 = std::min(width - 1, FloorInt(std::min(max_x, double(width)) - 0.5));
-    if (r0 > r1 || c0 > c1) continue;  // no pixel centre in the box (small faces)
-    const float d0 = ws.vertex_depth[face[0]], d1 = ws.vertex_depth[face[1]],
-                d2 = ws.vertex_depth[face[2]];
-    const Edge e0 = MakeEdge(px, face[1], face[2]);  // weight of vertex 0
-    const Edge e1 = MakeEdge(px, face[2], face[0]);  // of vertex 1
-    const Edge e2 = MakeEdge(px, face[0], face[1]);  // of vertex 2
-    // Twice the signed area; the weights w_k share its sign inside the triangle.
-    const double area = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
-    if (area == 0) continue;  // edge-on
-    const double sign = area > 0 ? 1.0 : -1.0, inv_area = 1.0 / area;
-    // The pixel centre (row, col), known to be inside: depth test and write.
-    auto draw = [&](int row, int col, double w1, double w2) {
+// One face into rows [row_begin, row_end): face id, barycentrics and depth of the
+// nearest face per pixel centre.
+struct BandTarget {
+  int width, row_begin, row_end;
+  RayHit* hits;
+  float* depth;
+};
+void RasterizeFace(const TriangleMesh& mesh, const RasterVertex* verts, int f, const BandTarget& t) {
+  const Eigen::Vector3i& face = mesh.faces[f];
+  const RasterVertex &a = verts[face[0]], &b = verts[face[1]], &c = verts[face[2]];
+  const double min_y = std::min({a.y, b.y, c.y}), max_y = std::max({a.y, b.y, c.y});
+  // Rows whose centre (row + 0.5) lies in [min_y, max_y]; NaN fails both tests.
+  if (!(max_y >= t.row_begin + 0.5 && min_y <= t.row_end - 0.5)) return;
+  const double min_x = std::min({a.x, b.x, c.x}), max_x = std::max({a.x, b.x, c.x});
+  if (!(max_x >= 0.5 && min_x <= t.width - 0.5)) return;
+  const int r0 = std::max(t.row_begin, CeilInt(std::max(min_y, -1.0) - 0.5));
+  const int r1 = std::min(t.row_end - 1, FloorInt(std::min(max_y, double(t.row_end)) - 0.5));
+  const int c0 = std::max(0, CeilInt(std::max(min_x, -1.0) - 0.5));
+  const int c1 = std::min(t.width - 1, FloorInt(std::min(max_x, double(t.width)) - 0.5));
+  if (r0 > r1 || c0 > c1) return;  // no pixel centre in the box (small faces)
+  const Edge e0 = MakeEdge(verts, face[1], face[2]);  // weight of vertex 0
+  const Edge e1 = MakeEdge(verts, face[2], face[0]);  // of vertex 1
+  const Edge e2 = MakeEdge(verts, face[0], face[1]);  // of vertex 2
+  // Twice the signed area; the weights w_k share its sign inside the triangle.
+  const double area = (double(b.x) - a.x) * (double(c.y) - a.y) - (double(b.y) - a.y) * (double(c.x) - a.x);
+  if (area == 0) return;  // edge-on
+  const double sign = area > 0 ? 1.0 : -1.0, inv_area = 1.0 / area;
+  for (int row = r0; row <= r1; ++row) {
+    const double y = row + 0.5;
+    for (int col = c0; col <= c1; ++col) {
+      const double x = col + 0.5;
+      const double w0 = e0(x, y), w1 = e1(x, y), w2 = e2(x, y);
+      if (!((sign * w0 >= 0) & (sign * w1 >= 0) & (sign * w2 >= 0))) continue;
       const float u = float(w1 * inv_area), v = float(w2 * inv_area);
-      const float z = d0 + u * (d1 - d0) + v * (d2 - d0);
-      const size_t p = size_t(row) * width + col;
-      if (!(z < depth[p])) return;
-      depth[p] = z;
-      (*hits)[p] = RayHit{int(f), 0.f, u, v};
-    };
-    if (r1 - r0 <= 1 && c1 - c0 <= 1) {
-      // At most 2 x 2 pixel centres (nearly every face at the refinement's resolution):
-      // the four are tested without branches, then only the inside ones are drawn.
-      unsigned inside = 0;
-      for (int k = 0; k < 4; ++k) {
-        const int row = r0 + (k >> 1), col = c0 + (k & 1);
-        const double x = col + 0.5, y = row + 0.5;
-        inside |= unsigned((row <= r1) & (col <= c1) & (sign * e0(x, y) >= 0) &
-                           (sign * e1(x, y) >= 0) & (sign * e2(x, y) >= 0))
-                  << k;
-      }
-      for (; inside; inside &= inside - 1) {
-        const int k = __builtin_ctz(inside);
-        const int row = r0 + (k >> 1), col = c0 + (k & 1);
-        draw(row, col, e1(col + 0.5, row + 0.5), e2(col + 0.5, row + 0.5));
-      }
-      continue;
-    }
-    for (int row = r0; row <= r1; ++row) {
-      const double y = row + 0.5;
-      for (int col = c0; col <= c1; ++col) {
-        const double x = col + 0.5;
-        const double w0 = e0(x, y), w1 = e1(x, y), w2 = e2(x, y);
-        if ((sign * w0 >= 0) & (sign * w1 >= 0) & (sign * w2 >= 0)) draw(row, col, w1, w2);
-      }
+      const float z = a.depth + u * (b.depth - a.depth) + v * (c.depth - a.depth);
+      const size_t p = size_t(row) * t.width + col;
+      if (!(z < t.depth[p])) continue;
+      t.depth[p] = z;
+      t.hits[p] = RayHit{f, 0.f, u, v};
     }
   }
 }
 
+#ifdef SATMESH_HAVE_AVX2_LATTICE
+// x, y and depth of 8 raster vertices.
+SATMESH_AVX2 inline void LoadVertices(const RasterVertex* verts, __m256i index, __m256* x,
+                                      __m256* y, __m256* depth) {
+  int i[8];
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(i), index);
+  auto row = [&](int k) { return _mm_loadu_ps(&verts[i[k]].x); };
+  const __m256 a0 = _mm256_set_m128(row(4), row(0)), a1 = _mm256_set_m128(row(5), row(1));
+  const __m256 a2 = _mm256_set_m128(row(6), row(2)), a3 = _mm256_set_m128(row(7), row(3));
+  const __m256 t0 = _mm256_unpacklo_ps(a0, a1), t1 = _mm256_unpackhi_ps(a0, a1);
+  const __m256 t2 = _mm256_unpacklo_ps(a2, a3), t3 = _mm256_unpackhi_ps(a2, a3);
+  *x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+  *y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+  *depth = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+}
+
+// Faces [0, n - n % 8) 8 at a time: those whose box holds at most 2 x 2 pixel centres
+// (nearly all at the refinement's resolution) are tested in float without branches; the
+// others go to RasterizeFace.
+SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVertex* verts,
+                                     const BandTarget& t) {
+  const size_t n8 = mesh.faces.size() / 8 * 8;
+  const __m256 half = _mm256_set1_ps(0.5f), one = _mm256_set1_ps(1.f), zero = _mm256_setzero_ps();
+  const __m256 minus1 = _mm256_set1_ps(-1.f);
+  const __m256 width = _mm256_set1_ps(float(t.width)), width_1 = _mm256_set1_ps(float(t.width - 1));
+  const __m256 row_begin = _mm256_set1_ps(float(t.row_begin)), row_end = _mm256_set1_ps(float(t.row_end));
+  const __m256 row_last = _mm256_set1_ps(float(t.row_end - 1));
+  for (size_t f = 0; f < n8; f += 8) {
+    __m256 fi[3];
+    LoadPoints3(reinterpret_cast<const float*>(mesh.faces[f].data()), &fi[0], &fi[1], &fi[2]);
+    __m256i idx[3];
+    __m256 x[3], y[3], d[3];
+    for (int k = 0; k < 3; ++k) {
+      idx[k] = _mm256_castps_si256(fi[k]);
+      LoadVertices(verts, idx[k], &x[k], &y[k], &d[k]);
+    }
+    const __m256 min_x = _mm256_min_ps(x[0], _mm256_min_ps(x[1], x[2]));
+    const __m256 max_x = _mm256_max_ps(x[0], _mm256_max_ps(x[1], x[2]));
+    const __m256 min_y = _mm256_min_ps(y[0], _mm256_min_ps(y[1], y[2]));
+    const __m256 max_y = _mm256_max_ps(y[0], _mm256_max_ps(y[1], y[2]));
+    // NaN vertices (off the RPC, non-finite) fail every ordered comparison.
+    const __m256 finite = _mm256_and_ps(
+        _mm256_and_ps(_mm256_cmp_ps(x[0], y[0], _CMP_ORD_Q), _mm256_cmp_ps(x[1], y[1], _CMP_ORD_Q)),
+        _mm256_cmp_ps(x[2], y[2], _CMP_ORD_Q));
+    const __m256 c0 = _mm256_max_ps(zero, _mm256_ceil_ps(_mm256_sub_ps(_mm256_max_ps(min_x, minus1), half)));
+    const __m256 c1 = _mm256_min_ps(width_1, _mm256_floor_ps(_mm256_sub_ps(_mm256_min_ps(max_x, width), half)));
+    const __m256 r0 = _mm256_max_ps(row_begin, _mm256_ceil_ps(_mm256_sub_ps(_mm256_max_ps(min_y, minus1), half)));
+    const __m256 r1 = _mm256_min_ps(row_last, _mm256_floor_ps(_mm256_sub_ps(_mm256_min_ps(max_y, row_end), half)));
+    const __m256 any = _mm256_and_ps(finite, _mm256_and_ps(_mm256_cmp_ps(c0, c1, _CMP_LE_OQ),
+                                                          _mm256_cmp_ps(r0, r1, _CMP_LE_OQ)));
+    if (_mm256_testz_ps(any, any)) continue;
+    const __m256 small = _mm256_and_ps(
+        any, _mm256_and_ps(_mm256_cmp_ps(_mm256_sub_ps(c1, c0), one, _CMP_LE_OQ),
+                           _mm256_cmp_ps(_mm256_sub_ps(r1, r0), one, _CMP_LE_OQ)));
+    for (int big = _mm256_movemask_ps(_mm256_andnot_ps(small, any)); big; big &= big - 1)
+      RasterizeFace(mesh, verts, int(f) + __builtin_ctz(big), t);
+    if (_mm256_testz_ps(small, small)) continue;
+    // Edge k is opposite vertex k, from its lower vertex index: A (x - ax) + B (y - ay).
+    __m256 A[3], B[3], ax[3], ay[3];
+    for (int k = 0; k < 3; ++k) {
+      const int s = (k + 1) % 3, e = (k + 2) % 3;
+      const __m256 swap = _mm256_castsi256_ps(_mm256_cmpgt_epi32(idx[s], idx[e]));
+      ax[k] = _mm256_blendv_ps(x[s], x[e], swap);
+      ay[k] = _mm256_blendv_ps(y[s], y[e], swap);
+      const __m256 bx = _mm256_blendv_ps(x[e], x[s], swap), by = _mm256_blendv_ps(y[e], y[s], swap);
+      const __m256 flip = _mm256_and_ps(swap, _mm256_set1_ps(-0.f));  // negate when swapped
+      A[k] = _mm256_xor_ps(_mm256_sub_ps(ay[k], by), flip);
+      B[k] = _mm256_xor_ps(_mm256_sub_ps(bx, ax[k]), flip);
+    }
+    const __m256 area = _mm256_sub_ps(
+        _mm256_mul_ps(_mm256_sub_ps(x[1], x[0]), _mm256_sub_ps(y[2], y[0])),
+        _mm256_mul_ps(_mm256_sub_ps(y[1], y[0]), _mm256_sub_ps(x[2], x[0])));
+    const __m256 sign = _mm256_and_ps(area, _mm256_set1_ps(-0.f));  // sign bit of the area
+    const __m256 inv_area = _mm256_div_ps(one, area);
+    const __m256 live = _mm256_and_ps(small, _mm256_cmp_ps(area, zero, _CMP_NEQ_OQ));
+    alignas(32) float us[4][8], vs[4][8], zs[4][8];
+    alignas(32) int ps[4][8];
+    uint32_t inside = 0;
+    for (int k = 0; k < 4; ++k) {
+      const __m256 col = _mm256_add_ps(c0, _mm256_set1_ps(float(k & 1)));
+      const __m256 row = _mm256_add_ps(r0, _mm256_set1_ps(float(k >> 1)));
+      const __m256 px = _mm256_add_ps(col, half), py = _mm256_add_ps(row, half);
+      __m256 w[3];
+      __m256 in = _mm256_and_ps(live, _mm256_and_ps(_mm256_cmp_ps(col, c1, _CMP_LE_OQ),
+                                                    _mm256_cmp_ps(row, r1, _CMP_LE_OQ)));
+      for (int e = 0; e < 3; ++e) {
+        w[e] = _mm256_fmadd_ps(A[e], _mm256_sub_ps(px, ax[e]), _mm256_mul_ps(B[e], _mm256_sub_ps(py, ay[e])));
+        // sign * w >= 0: w with the area's sign flipped in, compared with 0.
+        in = _mm256_and_ps(in, _mm256_cmp_ps(_mm256_xor_ps(w[e], sign), zero, _CMP_GE_OQ));
+      }
+      const __m256 u = _mm256_mul_ps(w[1], inv_area), v = _mm256_mul_ps(w[2], inv_area);
+      _mm256_store_ps(us[k], u);
+      _mm256_store_ps(vs[k], v);
+      _mm256_store_ps(zs[k], _mm256_fmadd_ps(v, _mm256_sub_ps(d[2], d[0]),
+                                             _mm256_fmadd_ps(u, _mm256_sub_ps(d[1], d[0]), d[0])));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(ps[k]),
+                         _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(row),
+                                                             _mm256_set1_epi32(t.width)),
+                                          _mm256_cvttps_epi32(col)));
+      inside |= uint32_t(_mm256_movemask_ps(in)) << (8 * k);
+    }
+    for (; inside; inside &= inside - 1) {
+      const int bit = __builtin_ctz(inside), k = bit >> 3, lane = bit & 7;
+      const size_t p = size_t(ps[k][lane]);
+      if (!(zs[k][lane] < t.depth[p])) continue;
+      t.depth[p] = zs[k][lane];
+      t.hits[p] = RayHit{int(f) + lane, 0.f, us[k][lane], vs[k][lane]};
+    }
+  }
+}
+#endif
+
+// Every face into rows [t.row_begin, t.row_end).
+void RasterizeBand(const TriangleMesh& mesh, const RasterVertex* verts, const BandTarget& t) {
+  size_t f = 0;
+#ifdef SATMESH_HAVE_AVX2_LATTICE
+  if (WarpHasAvx2()) {
+    RasterizeFacesAvx2(mesh, verts, t);
+    f = mesh.faces.size() / 8 * 8;
+  }
+#endif
+  for (; f < mesh.faces.size(); ++f) RasterizeFace(mesh, verts, int(f), t);
+}
+
 // The vertex's pixel through the double lattice (exact RPC outside it) and its depth.
-inline void ProjectVertex(const ViewLevel& view, const Eigen::Vector3f& along,
-                          const Eigen::Vector3f& p, Eigen::Vector2d* pixel, float* depth) {
+inline RasterVertex ProjectVertex(const ViewLevel& view, const Eigen::Vector3f& along,
+                                  const Eigen::Vector3f& p) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  if (!p.allFinite()) return RasterVertex{nan, nan, nan, 0};
   Eigen::Matrix<double, 2, 3> unused;
-  *pixel = p.allFinite() ? view.projection.PixelFromLocal(p.cast<double>(), &unused)
-                         : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
-  *depth = along.dot(p);
+  const Eigen::Vector2d px = view.projection.PixelFromLocal(p.cast<double>(), &unused);
+  return RasterVertex{float(px.x()), float(px.y()), along.dot(p), 0};
 }
 
 #ifdef SATMESH_HAVE_AVX2_LATTICE
-// Vertices [0, n - n % 8) 8 at a time through the float lattice; the lanes outside it
-// (and non-finite vertices) take ProjectVertex.
+// Vertices [begin, end) (a multiple of 8) 8 at a time through the float lattice; the
+// lanes outside it (and non-finite vertices) take ProjectVertex.
 SATMESH_AVX2 void ProjectVerticesAvx2(const std::vector<Eigen::Vector3f>& vertices,
                                       const ViewLevel& view, const Eigen::Vector3f& along,
-                                      long begin, long end, Eigen::Vector2d* pixels, float* depth) {
+                                      long begin, long end, RasterVertex* out) {
   const LatticeAvx2 lattice(view.projection);
   const __m256 all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
   for (long v = begin; v < end; v += 8) {
@@ -129,16 +231,21 @@ SATMESH_AVX2 void ProjectVerticesAvx2(const std::vector<Eigen::Vector3f>& vertic
     const __m256 d = _mm256_fmadd_ps(X[2], _mm256_set1_ps(along.z()),
                                      _mm256_fmadd_ps(X[1], _mm256_set1_ps(along.y()),
                                                      _mm256_mul_ps(X[0], _mm256_set1_ps(along.x()))));
-    _mm256_storeu_ps(depth + v, d);
-    alignas(32) float xs[8], ys[8];
-    _mm256_store_ps(xs, x);
-    _mm256_store_ps(ys, y);
-    const int in = _mm256_movemask_ps(inside);
-    for (int k = 0; k < 8; ++k) {
-      if (in >> k & 1)
-        pixels[v + k] = Eigen::Vector2d(xs[k], ys[k]);
-      else
-        ProjectVertex(view, along, vertices[v + k], &pixels[v + k], &depth[v + k]);
+    // Interleave (x, y, depth, 0) for 8 vertices: 4x4 transposes of each half.
+    const __m256 xy_lo = _mm256_unpacklo_ps(x, y), xy_hi = _mm256_unpackhi_ps(x, y);
+    const __m256 dz_lo = _mm256_unpacklo_ps(d, _mm256_setzero_ps()), dz_hi = _mm256_unpackhi_ps(d, _mm256_setzero_ps());
+    const __m256 r0 = _mm256_shuffle_ps(xy_lo, dz_lo, _MM_SHUFFLE(1, 0, 1, 0));  // vertices 0, 4
+    const __m256 r1 = _mm256_shuffle_ps(xy_lo, dz_lo, _MM_SHUFFLE(3, 2, 3, 2));  // 1, 5
+    const __m256 r2 = _mm256_shuffle_ps(xy_hi, dz_hi, _MM_SHUFFLE(1, 0, 1, 0));  // 2, 6
+    const __m256 r3 = _mm256_shuffle_ps(xy_hi, dz_hi, _MM_SHUFFLE(3, 2, 3, 2));  // 3, 7
+    float* o = &out[v].x;
+    _mm256_storeu_ps(o, _mm256_permute2f128_ps(r0, r1, 0x20));
+    _mm256_storeu_ps(o + 8, _mm256_permute2f128_ps(r2, r3, 0x20));
+    _mm256_storeu_ps(o + 16, _mm256_permute2f128_ps(r0, r1, 0x31));
+    _mm256_storeu_ps(o + 24, _mm256_permute2f128_ps(r2, r3, 0x31));
+    for (int out_lanes = ~_mm256_movemask_ps(inside) & 0xff; out_lanes; out_lanes &= out_lanes - 1) {
+      const int k = __builtin_ctz(out_lanes);
+      out[v + k] = ProjectVertex(view, along, vertices[v + k]);
     }
   }
 }
@@ -148,8 +255,7 @@ SATMESH_AVX2 void ProjectVerticesAvx2(const std::vector<Eigen::Vector3f>& vertic
 void ProjectVertices(const TriangleMesh& mesh, const ViewLevel& view, const Eigen::Vector3f& along,
                      RasterWorkspace* ws) {
   const long nv = long(mesh.vertices.size());
-  ws->pixels.resize(nv);
-  ws->vertex_depth.resize(nv);
+  ws->vertices.resize(nv);
   constexpr long kChunk = 4096;  // a multiple of 8
 #pragma omp parallel for schedule(static)
   for (long begin = 0; begin < nv; begin += kChunk) {
@@ -158,12 +264,10 @@ void ProjectVertices(const TriangleMesh& mesh, const ViewLevel& view, const Eige
 #ifdef SATMESH_HAVE_AVX2_LATTICE
     if (WarpHasAvx2()) {
       v = begin + (end - begin) / 8 * 8;
-      ProjectVerticesAvx2(mesh.vertices, view, along, begin, v, ws->pixels.data(),
-                          ws->vertex_depth.data());
+      ProjectVerticesAvx2(mesh.vertices, view, along, begin, v, ws->vertices.data());
     }
 #endif
-    for (; v < end; ++v)
-      ProjectVertex(view, along, mesh.vertices[v], &ws->pixels[v], &ws->vertex_depth[v]);
+    for (; v < end; ++v) ws->vertices[v] = ProjectVertex(view, along, mesh.vertices[v]);
   }
 }
 
@@ -186,7 +290,8 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
     // One band of rows per thread; every thread scans all faces (a cheap bounds test).
     const int threads = omp_get_num_threads(), t = omp_get_thread_num();
     const int row_begin = int(long(h) * t / threads), row_end = int(long(h) * (t + 1) / threads);
-    RasterizeBand(mesh, ws, w, row_begin, row_end, &map.hits, ws.depth.data());
+    RasterizeBand(mesh, ws.vertices.data(),
+                  BandTarget{w, row_begin, row_end, map.hits.data(), ws.depth.data()});
   }
   // The hit point on the face, its parameter along the pixel's ray (unit direction from
   // the plane z = z_high), and the ray cosine.

@@ -14,11 +14,16 @@
 
 namespace satmesh {
 
+// A vertex projected into the view: GDAL pixel coordinates (NaN when it does not
+// project), depth along the view's mean ray.
+struct RasterVertex {
+  float x, y, depth, unused;
+};
+
 // Scratch of the rasterizer (one per thread), reused across views and iterations.
 struct RasterWorkspace {
-  std::vector<Eigen::Vector2d> pixels;  // projected vertices (GDAL pixel coordinates)
-  std::vector<float> vertex_depth;      // per vertex, along the view's mean ray
-  std::vector<float> depth;             // z-buffer, per pixel
+  std::vector<RasterVertex> vertices;  // per mesh vertex
+  std::vector<float> depth;            // z-buffer, per pixel
 };
 
 // Fills view->hit_map (hits, points, faces) for the mesh's current vertices, like

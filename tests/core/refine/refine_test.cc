@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "tests/core/refine/plane_scene.h"
 
@@ -83,11 +84,20 @@ TEST(Refine, RasterizedAndRayCastHitMapsAgree) {
   for (size_t l = 0; l < a.levels.size(); ++l)
     for (size_t k = 0; k < a.levels[l].mean_zncc.size(); ++k)
       EXPECT_NEAR(a.levels[l].mean_zncc[k], b.levels[l].mean_zncc[k], 1e-4) << "level " << l;
-  double max_diff = 0;
-  for (size_t v = 0; v < a.mesh.vertices.size(); ++v)
-    max_diff = std::max(max_diff, double((a.mesh.vertices[v] - b.mesh.vertices[v]).norm()));
-  std::printf("max vertex difference %.2e m\n", max_diff);
-  EXPECT_LT(max_diff, 0.01);  // metres, 0.02 GSD
+  // Vertices are compared with their nearest in the other mesh: SortSpatially reorders
+  // them by position after each level, so float-level differences may permute them.
+  std::vector<double> distance;
+  for (const Eigen::Vector3f& p : a.mesh.vertices) {
+    float nearest = std::numeric_limits<float>::infinity();
+    for (const Eigen::Vector3f& q : b.mesh.vertices) nearest = std::min(nearest, (p - q).squaredNorm());
+    distance.push_back(std::sqrt(nearest));
+  }
+  std::sort(distance.begin(), distance.end());
+  const double p99 = distance[distance.size() * 99 / 100], max_diff = distance.back();
+  std::printf("distance to the nearest vertex: median %.1e, p99 %.1e, max %.1e m\n",
+              distance[distance.size() / 2], p99, max_diff);
+  EXPECT_LT(p99, 0.005);      // metres, 0.01 GSD
+  EXPECT_LT(max_diff, 0.05);  // 0.1 GSD
   EXPECT_GT(b.levels.back().times.intersect_s, 0);   // Embree did trace
   EXPECT_EQ(a.levels.back().times.intersect_s, 0);   // and was not needed
 }
