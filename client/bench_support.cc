@@ -120,8 +120,8 @@ RaycastTiming TimeRaycast(const RefineInput& input, const TriangleMesh& mesh,
     for (const auto& h : v.hit_map.hits) hit += h.hit();
   }
   // The rasterized hit maps of the same views, and how often they agree with Embree's.
-  std::vector<std::vector<int>> embree_faces;
-  for (const auto& v : levels) embree_faces.push_back(v.hit_map.faces);
+  std::vector<std::vector<RayHit>> embree_hits;
+  for (const auto& v : levels) embree_hits.push_back(v.hit_map.hits);
   std::vector<RasterWorkspace> raster;
   timing.raster_s = 1e300;
   for (int r = 0; r < std::max(1, repeats); ++r) {
@@ -131,8 +131,8 @@ RaycastTiming TimeRaycast(const RefineInput& input, const TriangleMesh& mesh,
   }
   long same = 0;
   for (size_t k = 0; k < levels.size(); ++k)
-    for (size_t p = 0; p < embree_faces[k].size(); ++p)
-      same += embree_faces[k][p] == levels[k].hit_map.faces[p];
+    for (size_t p = 0; p < embree_hits[k].size(); ++p)
+      same += embree_hits[k][p].face == levels[k].hit_map.hits[p].face;
   timing.raster_agreement = timing.num_rays > 0 ? double(same) / timing.num_rays : 0;
   timing.hit_fraction = timing.num_rays > 0 ? double(hit) / timing.num_rays : 0;
   return timing;

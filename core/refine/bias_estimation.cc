@@ -85,8 +85,7 @@ class ShiftObjective {
         const size_t p = size_t(row) * w + col;
         const bool inside = c >= 0 && r >= 0 && c < w && r < h;
         map.hits[p] = inside ? base_hits_.hits[size_t(r) * w + c] : RayHit{};
-        map.faces[p] = map.hits[p].face;
-        if (inside) map.points[p] = base_hits_.points[size_t(r) * w + c];
+        map.surface[p] = inside ? base_hits_.surface[size_t(r) * w + c] : SurfacePoint{};
       }
     }
   }

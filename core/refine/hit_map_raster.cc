@@ -280,8 +280,7 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
   const int w = view->width(), h = view->height();
   const size_t n = size_t(w) * h;
   map.hits.assign(n, RayHit{});
-  map.points.resize(n);
-  map.faces.resize(n);
+  map.surface.resize(n);
   if (face_normals) map.ray_cos.resize(n);
   ws.depth.assign(n, std::numeric_limits<float>::infinity());
   ProjectVertices(mesh, *view, MeanRayDirection(*view), &ws);
@@ -299,7 +298,7 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
 #pragma omp parallel for schedule(static)
   for (long p = 0; p < long(n); ++p) {
     RayHit& hit = map.hits[p];
-    map.faces[p] = hit.face;
+    map.surface[p].face = hit.face;
     if (face_normals) map.ray_cos[p] = RayCosine(view->ray_directions[p], hit.face, *face_normals);
     if (!hit.hit()) continue;
     const Eigen::Vector3i& f = mesh.faces[hit.face];
@@ -308,7 +307,7 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
         p0 + hit.u * (mesh.vertices[f[1]] - p0) + hit.v * (mesh.vertices[f[2]] - p0);
     const Eigen::Vector3f& direction = view->ray_directions[p];
     hit.t = (X.z() - z_high) / direction.z();
-    map.points[p] = X;
+    map.surface[p].point = X;
   }
 }
 

@@ -52,6 +52,44 @@ SATMESH_AVX2 inline void LoadPoints3(const float* p, __m256* x, __m256* y, __m25
   *z = _mm256_shuffle_ps(yz, m25, _MM_SHUFFLE(3, 0, 3, 1));
 }
 
+// 4x8 transpose: lanes 0-3 in the low halves of r[0..3], lanes 4-7 in their high halves.
+SATMESH_AVX2 inline void Transpose4(__m256 a0, __m256 a1, __m256 a2, __m256 a3, __m256* f0,
+                                    __m256* f1, __m256* f2, __m256* f3) {
+  const __m256 t0 = _mm256_unpacklo_ps(a0, a1), t1 = _mm256_unpackhi_ps(a0, a1);
+  const __m256 t2 = _mm256_unpacklo_ps(a2, a3), t3 = _mm256_unpackhi_ps(a2, a3);
+  *f0 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+  *f1 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+  *f2 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+  *f3 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
+// The 4 floats at lo and at hi as one vector (lo in the low half).
+SATMESH_AVX2 inline __m256 Load2x4(const float* lo, const float* hi) {
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(lo)), _mm_loadu_ps(hi), 1);
+}
+
+// Fields 0-3 of 8 consecutive 4-float records (32 floats from p).
+SATMESH_AVX2 inline void LoadRecords4(const float* p, __m256* f0, __m256* f1, __m256* f2, __m256* f3) {
+  Transpose4(Load2x4(p, p + 16), Load2x4(p + 4, p + 20), Load2x4(p + 8, p + 24),
+             Load2x4(p + 12, p + 28), f0, f1, f2, f3);
+}
+
+// Fields 0-3 of the 4-float records base + 4 * index[k] (lanes off the mask read record
+// 0 and give 0).
+SATMESH_AVX2 inline void GatherRecords4(const float* base, __m256i index, __m256 mask, __m256* f0,
+                                        __m256* f1, __m256* f2, __m256* f3) {
+  int i[8];
+  LaneIndices(index, mask, i);
+  const float* r[8];
+  for (int k = 0; k < 8; ++k) r[k] = base + 4 * size_t(i[k]);
+  Transpose4(Load2x4(r[0], r[4]), Load2x4(r[1], r[5]), Load2x4(r[2], r[6]), Load2x4(r[3], r[7]),
+             f0, f1, f2, f3);
+  *f0 = _mm256_and_ps(*f0, mask);
+  *f1 = _mm256_and_ps(*f1, mask);
+  *f2 = _mm256_and_ps(*f2, mask);
+  *f3 = _mm256_and_ps(*f3, mask);
+}
+
 // The 8 floats at base + 8 * index[k] for each lane k, transposed: out[m] holds float m of
 // every lane's record (lanes off the mask read record 0).
 SATMESH_AVX2 inline void GatherRecords8(const float* base, __m256i index, __m256 mask, __m256* out) {

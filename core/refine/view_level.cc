@@ -63,8 +63,7 @@ double CastHitMap(const RayScene& scene, ViewLevel* view,
   const std::vector<Ray> rays = PixelRays(*view);
   const size_t n = rays.size();
   map.hits.resize(n);
-  map.points.resize(n);
-  map.faces.resize(n);
+  map.surface.resize(n);
   if (face_normals) map.ray_cos.resize(n);
   const auto start = std::chrono::steady_clock::now();
   scene.IntersectImage(rays.data(), view->width(), view->height(), map.hits.data());
@@ -72,8 +71,8 @@ double CastHitMap(const RayScene& scene, ViewLevel* view,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < long(n); ++i) {
-    map.faces[i] = map.hits[i].face;
-    if (map.hits[i].hit()) map.points[i] = rays[i].origin + map.hits[i].t * rays[i].direction;
+    map.surface[i].face = map.hits[i].face;
+    if (map.hits[i].hit()) map.surface[i].point = rays[i].origin + map.hits[i].t * rays[i].direction;
     if (face_normals) map.ray_cos[i] = RayCosine(rays[i].direction, map.hits[i].face, *face_normals);
   }
   return intersect_s;

@@ -12,11 +12,16 @@
 
 namespace satmesh {
 
+// A pixel's hit point and face in one 16-byte record: other views' visibility lookups
+// land at random pixels and read both, from one cache line.
+struct SurfacePoint {
+  Eigen::Vector3f point;  // frame coordinates, valid where face >= 0
+  int face = -1;          // hits[i].face again
+};
+
 struct HitMap {
   std::vector<RayHit> hits;             // one per pixel, row-major
-  std::vector<Eigen::Vector3f> points;  // hit points (frame), valid where hits[i].hit()
-  std::vector<int> faces;               // hits[i].face again, 4 bytes a pixel: other views'
-                                        // visibility lookups land at random pixels
+  std::vector<SurfacePoint> surface;    // per pixel
   std::vector<float> ray_cos;           // ray · face normal per hit pixel (RayCosine; filled
                                         // by CastHitMap / RasterizeHitMap given the normals);
                                         // shared by all pair-directions from this view

@@ -13,12 +13,13 @@ namespace {
 inline void WarpPixel(const WarpContext& c, size_t p) {
   const ViewLevel& vi = *c.vi;
   const ViewLevel& vj = *c.vj;
-  const int face = vi.hit_map.faces[p];
+  const SurfacePoint& hit = vi.hit_map.surface[p];
+  const int face = hit.face;
   if (face < 0) return;
   const Eigen::Vector3f& ray_dir = vi.ray_directions[p];
   const float cos_ray = c.cos_i ? c.cos_i[p] : ray_dir.dot((*c.face_normals)[face]);
   if (cos_ray > -c.min_cos) return;  // grazing or back-facing
-  const Eigen::Vector3f& X = vi.hit_map.points[p];
+  const Eigen::Vector3f& X = hit.point;
   Eigen::Matrix<double, 2, 3> pixel_from_local;
   const Eigen::Vector2d xj = vj.projection.PixelFromLocal(X.cast<double>(), &pixel_from_local);
   const int wj = vj.width();
@@ -26,8 +27,8 @@ inline void WarpPixel(const WarpContext& c, size_t p) {
   // Visibility in j: j's own ray through that pixel must hit the same surface point (the
   // same face needs no point read).
   const size_t q = size_t(int(xj.y())) * wj + int(xj.x());
-  const int face_j = vj.hit_map.faces[q];
-  if (face_j != face && (face_j < 0 || (vj.hit_map.points[q] - X).squaredNorm() > c.tol2)) return;
+  const SurfacePoint& hit_j = vj.hit_map.surface[q];
+  if (hit_j.face != face && (hit_j.face < 0 || (hit_j.point - X).squaredNorm() > c.tol2)) return;
   // Bilinear sample of j (centre-origin coordinates, at least half a pixel inside) with
   // the exact derivatives of the interpolant.
   const double u = xj.x() - 0.5, v = xj.y() - 0.5;
@@ -59,12 +60,10 @@ struct RowWarpAvx2 {
   const WarpContext& c;
   size_t base;              // first pixel of the row
   int wj;
-  const int* faces_i;       // this row's
+  const float* surface_i;   // this row's SurfacePoints (4 floats a pixel)
   const float* cos_i;
-  const float* points_i;    // 3 floats a pixel
   const float* rays_i;      // 3 floats a pixel (unit direction)
-  const int* faces_j;
-  const float* points_j;
+  const float* surface_j;
   const float* image_j;
   LatticeAvx2 lattice_j;
 
@@ -74,12 +73,10 @@ struct RowWarpAvx2 {
     const ViewLevel& vj = *c.vj;
     wj = vj.width();
     base = size_t(row) * vi.width();
-    faces_i = vi.hit_map.faces.data() + base;
+    surface_i = vi.hit_map.surface[base].point.data();
     cos_i = c.cos_i + base;
-    points_i = vi.hit_map.points[base].data();
     rays_i = vi.ray_directions[base].data();
-    faces_j = vj.hit_map.faces.data();
-    points_j = vj.hit_map.points.data()->data();
+    surface_j = vj.hit_map.surface.data()->point.data();
     image_j = vj.image.pixels.data();
   }
 
@@ -89,15 +86,16 @@ struct RowWarpAvx2 {
     const __m256i minus1 = _mm256_set1_epi32(-1), wj_v = _mm256_set1_epi32(wj);
     const __m256 half = _mm256_set1_ps(0.5f), one = _mm256_set1_ps(1.f), zero = _mm256_setzero_ps();
     // Hit, facing the view.
-    const __m256i face = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(faces_i + col));
+    __m256 X[3], face_f;
+    LoadRecords4(surface_i + 4 * size_t(col), &X[0], &X[1], &X[2], &face_f);
+    const __m256i face = _mm256_castps_si256(face_f);
     const __m256 cos_ray = _mm256_loadu_ps(cos_i + col);
     const __m256 hit = _mm256_castsi256_ps(_mm256_cmpgt_epi32(face, minus1));
     const __m256 facing =
         _mm256_and_ps(hit, _mm256_cmp_ps(cos_ray, _mm256_set1_ps(-c.min_cos), _CMP_LE_OQ));
     if (_mm256_testz_ps(facing, facing)) return 0;
     // X, and its pixel in j.
-    __m256 X[3], xj, yj, J[6];
-    LoadPoints3(points_i + 3 * size_t(col), &X[0], &X[1], &X[2]);
+    __m256 xj, yj, J[6];
     const __m256 in_lattice = lattice_j.Project(X, facing, &xj, &yj, J);
     const int outside = _mm256_movemask_ps(_mm256_andnot_ps(in_lattice, facing));
     if (_mm256_testz_ps(in_lattice, in_lattice)) return outside;
@@ -111,17 +109,18 @@ struct RowWarpAvx2 {
     // Visibility in j: the same face, or j's point within the tolerance.
     const __m256i q = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(yj), wj_v),
                                        _mm256_cvttps_epi32(xj));
-    const __m256i face_j = GatherInt(faces_j, q, _mm256_castps_si256(inside), minus1);
+    // Visibility in j: the same face, or j's point within the tolerance.
+    __m256 Xj[3], face_j_f;
+    GatherRecords4(surface_j, q, inside, &Xj[0], &Xj[1], &Xj[2], &face_j_f);
+    const __m256i face_j = _mm256_blendv_epi8(minus1, _mm256_castps_si256(face_j_f),
+                                              _mm256_castps_si256(inside));
     const __m256 same = _mm256_castsi256_ps(_mm256_cmpeq_epi32(face_j, face));
     const __m256 other = _mm256_andnot_ps(
         same, _mm256_and_ps(inside, _mm256_castsi256_ps(_mm256_cmpgt_epi32(face_j, minus1))));
-    const __m256i q3 = _mm256_add_epi32(q, _mm256_add_epi32(q, q));
     __m256 dist2 = zero;
-    if (!_mm256_testz_ps(other, other)) {
-      for (int a = 0; a < 3; ++a) {
-        const __m256 diff = _mm256_sub_ps(Gather(points_j + a, q3, other), X[a]);
-        dist2 = _mm256_fmadd_ps(diff, diff, dist2);
-      }
+    for (int a = 0; a < 3; ++a) {
+      const __m256 diff = _mm256_sub_ps(Xj[a], X[a]);
+      dist2 = _mm256_fmadd_ps(diff, diff, dist2);
     }
     const __m256 near = _mm256_and_ps(other, _mm256_cmp_ps(dist2, _mm256_set1_ps(c.tol2), _CMP_LE_OQ));
     const __m256 used = _mm256_and_ps(inside, _mm256_or_ps(same, near));

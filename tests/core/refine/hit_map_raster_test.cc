@@ -45,12 +45,12 @@ Agreement CompareWithRaycast(const TriangleMesh& mesh, double off_nadir_deg) {
   Agreement a;
   for (size_t p = 0; p < cast.hit_map.hits.size(); ++p) {
     const RayHit &c = cast.hit_map.hits[p], &r = raster.hit_map.hits[p];
-    EXPECT_EQ(raster.hit_map.faces[p], r.face);
+    EXPECT_EQ(raster.hit_map.surface[p].face, r.face);
     if (c.hit() != r.hit()) ++a.hit_mismatch;
     if (!c.hit() || !r.hit()) continue;
     ++a.both;
     a.same_face += c.face == r.face;
-    a.close += (cast.hit_map.points[p] - raster.hit_map.points[p]).norm() < 0.005f;
+    a.close += (cast.hit_map.surface[p].point - raster.hit_map.surface[p].point).norm() < 0.005f;
     a.close_t += std::abs(c.t - r.t) < 0.005f;  // unit directions: t in metres
   }
   std::printf("both hit %ld, hit mismatch %ld, same face %.5f, points within 5 mm %.5f\n", a.both,
@@ -100,13 +100,13 @@ TEST(RasterizeHitMap, HitPointsReprojectOntoTheirPixelsUnderACubicRfm) {
   for (size_t p = 0; p < cast.hit_map.hits.size(); ++p) {
     if (!cast.hit_map.hits[p].hit() || !raster.hit_map.hits[p].hit()) continue;
     ++both;
-    same_face += cast.hit_map.faces[p] == raster.hit_map.faces[p];
+    same_face += cast.hit_map.surface[p].face == raster.hit_map.surface[p].face;
     const Eigen::Vector2d centre(p % 160 + 0.5, p / 160 + 0.5);
     auto error = [&](const Eigen::Vector3f& X) {
       return (rpc.PixelFromGeo(frame.GeoFromLocal(X.cast<double>())) - centre).norm();
     };
-    err_cast.push_back(error(cast.hit_map.points[p]));
-    err_raster.push_back(error(raster.hit_map.points[p]));
+    err_cast.push_back(error(cast.hit_map.surface[p].point));
+    err_raster.push_back(error(raster.hit_map.surface[p].point));
   }
   std::sort(err_cast.begin(), err_cast.end());
   std::sort(err_raster.begin(), err_raster.end());
@@ -139,7 +139,7 @@ TEST(RasterizeHitMap, SkipsFacesWithNonFiniteVertices) {
       if (!hit.hit()) continue;
       ++hits;
       for (int k = 0; k < 3; ++k) EXPECT_TRUE(mesh.vertices[mesh.faces[hit.face][k]].allFinite());
-      EXPECT_TRUE(view.hit_map.points[p].allFinite());
+      EXPECT_TRUE(view.hit_map.surface[p].point.allFinite());
     }
     return hits;
   };
