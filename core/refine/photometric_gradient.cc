@@ -94,7 +94,11 @@ PairEnergy AccumulatePairGradient(const ViewLevel& view_i, const ViewLevel& view
   energy.num_windows = field.num_windows;
   if (accumulator) accumulator->BeginDirection();
   const RayHit* hits = view_i.hit_map.hits.data();
-  for (size_t p = 0; p < warp.valid.size(); ++p) {
+  const size_t n = warp.valid.size();
+  constexpr size_t kAhead = 16;  // pixels: the face slots are random reads of a large array
+  for (size_t p = 0; p < n; ++p) {
+    if (accumulator && p + kAhead < n && warp.valid[p + kAhead])
+      accumulator->Prefetch(hits[p + kAhead].face);
     if (!warp.valid[p]) continue;
     ++energy.num_valid_pixels;
     if (!accumulator) continue;
