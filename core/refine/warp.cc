@@ -80,6 +80,24 @@ struct RowWarpAvx2 {
     image_j = vj.image.pixels.data();
   }
 
+  // Starts loading the j data that the group two ahead will read: j's pixels move along
+  // a line as i's do (the warp is locally affine), so they are extrapolated from this
+  // group's first and last lanes. A wrong guess (at depth edges) costs a wasted load.
+  SATMESH_AVX2 void PrefetchAhead(__m256i q, __m256 inside) const {
+    int i[8];
+    LaneIndices(q, inside, i);
+    const int mask = _mm256_movemask_ps(inside);
+    if ((mask & 0x81) != 0x81) return;
+    const long ahead = long(i[7] - i[0]) * 16 / 7;
+    const long n = long(c.vj->hit_map.surface.size());
+    for (int k = 0; k < 8; ++k) {
+      const long p = i[k] + ahead;
+      if (p < wj || p >= n - wj) continue;
+      __builtin_prefetch(surface_j + 4 * p);
+      __builtin_prefetch(image_j + p);  // (the rows above and below: measured slower)
+    }
+  }
+
   // Pixels [col, col + 8): writes b, db_dn and valid of all 8. Returns the lanes (bits)
   // that fall outside j's lattice, for the scalar path.
   SATMESH_AVX2 int Group(int col) const {
@@ -106,9 +124,9 @@ struct RowWarpAvx2 {
                                   _mm256_and_ps(_mm256_cmp_ps(xj, max_x, _CMP_LT_OQ),
                                                 _mm256_cmp_ps(yj, max_y, _CMP_LT_OQ))));
     if (_mm256_testz_ps(inside, inside)) return outside;
-    // Visibility in j: the same face, or j's point within the tolerance.
     const __m256i q = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(yj), wj_v),
                                        _mm256_cvttps_epi32(xj));
+    PrefetchAhead(q, inside);
     // Visibility in j: the same face, or j's point within the tolerance.
     __m256 Xj[3], face_j_f;
     GatherRecords4(surface_j, q, inside, &Xj[0], &Xj[1], &Xj[2], &face_j_f);
