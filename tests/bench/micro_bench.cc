@@ -15,6 +15,8 @@
 #include "core/refine/coarse_mesh.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/hit_map_raster.h"
+#include "core/refine/lattice_avx2.h"
+#include "core/refine/warp.h"
 #include "core/refine/photometric_gradient.h"
 #include "core/refine/projection_grid.h"
 #include "core/refine/thin_plate.h"
@@ -284,6 +286,38 @@ void BM_PairDirectionRefinement(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * view_i.width() * view_i.height());
 }
 BENCHMARK(BM_PairDirectionRefinement)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+
+#ifdef SATMESH_HAVE_AVX2_LATTICE
+// 8-lane loads from a 4 KiB table (L1), 4 independent chains: the hardware gather
+// against lattice_avx2.h's scalar loads and inserts. Items are 8-lane loads; on the
+// benchmark machine (gather-data-sampling microcode) the gather is the slower one.
+SATMESH_AVX2 __m256 HardwareGather(const float* table, __m256i index, __m256 mask) {
+  return _mm256_mask_i32gather_ps(_mm256_setzero_ps(), table, index, mask, 4);
+}
+template <bool kHardware>
+SATMESH_AVX2 void GatherLoop(benchmark::State& state) {
+  std::vector<float> table(1024, 1.f);
+  std::vector<int> indices(8192);
+  for (size_t i = 0; i < indices.size(); ++i) indices[i] = int(i * 37) & 1023;
+  const __m256 all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+  for (auto _ : state) {
+    __m256 acc[4] = {_mm256_setzero_ps(), _mm256_setzero_ps(), _mm256_setzero_ps(), _mm256_setzero_ps()};
+    for (size_t i = 0; i < indices.size(); i += 32)
+      for (int k = 0; k < 4; ++k) {
+        const __m256i index = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(&indices[i + 8 * k]));
+        acc[k] = _mm256_add_ps(acc[k], kHardware ? HardwareGather(table.data(), index, all)
+                                                 : Gather(table.data(), index, all));
+      }
+    benchmark::DoNotOptimize(acc);
+  }
+  state.SetItemsProcessed(state.iterations() * indices.size() / 8);
+}
+void BM_Gather8Lanes(benchmark::State& state) {
+  if (!WarpHasAvx2()) return state.SkipWithError("no AVX2");
+  state.range(0) ? GatherLoop<true>(state) : GatherLoop<false>(state);
+}
+BENCHMARK(BM_Gather8Lanes)->ArgName("vgatherdps")->Arg(0)->Arg(1);
+#endif
 
 void BM_UmbrellaSquared(benchmark::State& state) {
   const VertexAdjacency adjacency = BuildVertexAdjacency(CityMesh());
