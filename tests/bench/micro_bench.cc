@@ -259,9 +259,10 @@ BENCHMARK(BM_AccumulatePhotometricGradient)->Unit(benchmark::kMillisecond)->UseR
 
 void BM_RasterizeHitMapRefinement(benchmark::State& state) {  // 1.4 faces per pixel, Z-order
   const TriangleMesh& mesh = RefinementMesh();  // built before the timing
+  const auto normals = FaceNormals(mesh);        // ray cosines too, as the refinement asks
   ViewLevel view = MakeView(0, 20, 30);
   RasterWorkspace workspace;
-  for (auto _ : state) RasterizeHitMap(mesh, &view, &workspace);
+  for (auto _ : state) RasterizeHitMap(mesh, &view, &workspace, &normals);
   state.SetItemsProcessed(state.iterations() * view.width() * view.height());
 }
 BENCHMARK(BM_RasterizeHitMapRefinement)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
