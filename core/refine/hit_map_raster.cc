@@ -30,8 +30,14 @@ inline Edge MakeEdge(const RasterVertex* v, int s, int t) {
 
 // floor and ceil of finite values in int range, without libm calls (no SSE4.1 in the
 // portable build).
-inline int FloorInt(double a) { const int i = int(a); return i - (a < i); }
-inline int CeilInt(double a) { const int i = int(a); return i + (a > i); }
+inline int FloorInt(double a) {
+  const int i = int(a);
+  return i - (a < i);
+}
+inline int CeilInt(double a) {
+  const int i = int(a);
+  return i + (a > i);
+}
 
 // The view's mean ray direction (unit), from the central pixel's ray.
 Eigen::Vector3f MeanRayDirection(const ViewLevel& view) {
@@ -46,7 +52,8 @@ struct BandTarget {
   RayHit* hits;
   float* depth;
 };
-void RasterizeFace(const TriangleMesh& mesh, const RasterVertex* verts, int f, const BandTarget& t) {
+void RasterizeFace(const TriangleMesh& mesh, const RasterVertex* verts, int f,
+                   const BandTarget& t) {
   const Eigen::Vector3i& face = mesh.faces[f];
   const RasterVertex &a = verts[face[0]], &b = verts[face[1]], &c = verts[face[2]];
   const double min_y = std::min({a.y, b.y, c.y}), max_y = std::max({a.y, b.y, c.y});
@@ -58,12 +65,13 @@ void RasterizeFace(const TriangleMesh& mesh, const RasterVertex* verts, int f, c
   const int r1 = std::min(t.row_end - 1, FloorInt(std::min(max_y, double(t.row_end)) - 0.5));
   const int c0 = std::max(0, CeilInt(std::max(min_x, -1.0) - 0.5));
   const int c1 = std::min(t.width - 1, FloorInt(std::min(max_x, double(t.width)) - 0.5));
-  if (r0 > r1 || c0 > c1) return;  // no pixel centre in the box (small faces)
+  if (r0 > r1 || c0 > c1) return;                     // no pixel centre in the box (small faces)
   const Edge e0 = MakeEdge(verts, face[1], face[2]);  // weight of vertex 0
   const Edge e1 = MakeEdge(verts, face[2], face[0]);  // of vertex 1
   const Edge e2 = MakeEdge(verts, face[0], face[1]);  // of vertex 2
   // Twice the signed area; the weights w_k share its sign inside the triangle.
-  const double area = (double(b.x) - a.x) * (double(c.y) - a.y) - (double(b.y) - a.y) * (double(c.x) - a.x);
+  const double area =
+      (double(b.x) - a.x) * (double(c.y) - a.y) - (double(b.y) - a.y) * (double(c.x) - a.x);
   if (area == 0) return;  // edge-on
   const double sign = area > 0 ? 1.0 : -1.0, inv_area = 1.0 / area;
   for (int row = r0; row <= r1; ++row) {
@@ -107,7 +115,8 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
   const __m256 half = _mm256_set1_ps(0.5f), one = _mm256_set1_ps(1.f), zero = _mm256_setzero_ps();
   const __m256 minus1 = _mm256_set1_ps(-1.f);
   const __m256 width = _mm256_set1_ps(float(t.width)), width_1 = _mm256_set1_ps(float(t.width - 1));
-  const __m256 row_begin = _mm256_set1_ps(float(t.row_begin)), row_end = _mm256_set1_ps(float(t.row_end));
+  const __m256 row_begin = _mm256_set1_ps(float(t.row_begin)),
+               row_end = _mm256_set1_ps(float(t.row_end));
   const __m256 row_last = _mm256_set1_ps(float(t.row_end - 1));
   for (size_t f = 0; f < n8; f += 8) {
     __m256 fi[3];
@@ -126,16 +135,20 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
     const __m256 finite = _mm256_and_ps(
         _mm256_and_ps(_mm256_cmp_ps(x[0], y[0], _CMP_ORD_Q), _mm256_cmp_ps(x[1], y[1], _CMP_ORD_Q)),
         _mm256_cmp_ps(x[2], y[2], _CMP_ORD_Q));
-    const __m256 c0 = _mm256_max_ps(zero, _mm256_ceil_ps(_mm256_sub_ps(_mm256_max_ps(min_x, minus1), half)));
-    const __m256 c1 = _mm256_min_ps(width_1, _mm256_floor_ps(_mm256_sub_ps(_mm256_min_ps(max_x, width), half)));
-    const __m256 r0 = _mm256_max_ps(row_begin, _mm256_ceil_ps(_mm256_sub_ps(_mm256_max_ps(min_y, minus1), half)));
-    const __m256 r1 = _mm256_min_ps(row_last, _mm256_floor_ps(_mm256_sub_ps(_mm256_min_ps(max_y, row_end), half)));
+    const __m256 c0 =
+        _mm256_max_ps(zero, _mm256_ceil_ps(_mm256_sub_ps(_mm256_max_ps(min_x, minus1), half)));
+    const __m256 c1 =
+        _mm256_min_ps(width_1, _mm256_floor_ps(_mm256_sub_ps(_mm256_min_ps(max_x, width), half)));
+    const __m256 r0 =
+        _mm256_max_ps(row_begin, _mm256_ceil_ps(_mm256_sub_ps(_mm256_max_ps(min_y, minus1), half)));
+    const __m256 r1 = _mm256_min_ps(
+        row_last, _mm256_floor_ps(_mm256_sub_ps(_mm256_min_ps(max_y, row_end), half)));
     const __m256 any = _mm256_and_ps(finite, _mm256_and_ps(_mm256_cmp_ps(c0, c1, _CMP_LE_OQ),
-                                                          _mm256_cmp_ps(r0, r1, _CMP_LE_OQ)));
+                                                           _mm256_cmp_ps(r0, r1, _CMP_LE_OQ)));
     if (_mm256_testz_ps(any, any)) continue;
-    const __m256 small = _mm256_and_ps(
-        any, _mm256_and_ps(_mm256_cmp_ps(_mm256_sub_ps(c1, c0), one, _CMP_LE_OQ),
-                           _mm256_cmp_ps(_mm256_sub_ps(r1, r0), one, _CMP_LE_OQ)));
+    const __m256 small =
+        _mm256_and_ps(any, _mm256_and_ps(_mm256_cmp_ps(_mm256_sub_ps(c1, c0), one, _CMP_LE_OQ),
+                                         _mm256_cmp_ps(_mm256_sub_ps(r1, r0), one, _CMP_LE_OQ)));
     for (int big = _mm256_movemask_ps(_mm256_andnot_ps(small, any)); big; big &= big - 1)
       RasterizeFace(mesh, verts, int(f) + __builtin_ctz(big), t);
     if (_mm256_testz_ps(small, small)) continue;
@@ -151,9 +164,9 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
       A[k] = _mm256_xor_ps(_mm256_sub_ps(ay[k], by), flip);
       B[k] = _mm256_xor_ps(_mm256_sub_ps(bx, ax[k]), flip);
     }
-    const __m256 area = _mm256_sub_ps(
-        _mm256_mul_ps(_mm256_sub_ps(x[1], x[0]), _mm256_sub_ps(y[2], y[0])),
-        _mm256_mul_ps(_mm256_sub_ps(y[1], y[0]), _mm256_sub_ps(x[2], x[0])));
+    const __m256 area =
+        _mm256_sub_ps(_mm256_mul_ps(_mm256_sub_ps(x[1], x[0]), _mm256_sub_ps(y[2], y[0])),
+                      _mm256_mul_ps(_mm256_sub_ps(y[1], y[0]), _mm256_sub_ps(x[2], x[0])));
     const __m256 sign = _mm256_and_ps(area, _mm256_set1_ps(-0.f));  // sign bit of the area
     const __m256 inv_area = _mm256_div_ps(one, area);
     const __m256 live = _mm256_and_ps(small, _mm256_cmp_ps(area, zero, _CMP_NEQ_OQ));
@@ -168,7 +181,8 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
       __m256 in = _mm256_and_ps(live, _mm256_and_ps(_mm256_cmp_ps(col, c1, _CMP_LE_OQ),
                                                     _mm256_cmp_ps(row, r1, _CMP_LE_OQ)));
       for (int e = 0; e < 3; ++e) {
-        w[e] = _mm256_fmadd_ps(A[e], _mm256_sub_ps(px, ax[e]), _mm256_mul_ps(B[e], _mm256_sub_ps(py, ay[e])));
+        w[e] = _mm256_fmadd_ps(A[e], _mm256_sub_ps(px, ax[e]),
+                               _mm256_mul_ps(B[e], _mm256_sub_ps(py, ay[e])));
         // sign * w >= 0: w with the area's sign flipped in, compared with 0.
         in = _mm256_and_ps(in, _mm256_cmp_ps(_mm256_xor_ps(w[e], sign), zero, _CMP_GE_OQ));
       }
@@ -177,10 +191,10 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
       _mm256_store_ps(vs[k], v);
       _mm256_store_ps(zs[k], _mm256_fmadd_ps(v, _mm256_sub_ps(d[2], d[0]),
                                              _mm256_fmadd_ps(u, _mm256_sub_ps(d[1], d[0]), d[0])));
-      _mm256_store_si256(reinterpret_cast<__m256i*>(ps[k]),
-                         _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(row),
-                                                             _mm256_set1_epi32(t.width)),
-                                          _mm256_cvttps_epi32(col)));
+      _mm256_store_si256(
+          reinterpret_cast<__m256i*>(ps[k]),
+          _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(row), _mm256_set1_epi32(t.width)),
+                           _mm256_cvttps_epi32(col)));
       inside |= uint32_t(_mm256_movemask_ps(in)) << (8 * k);
     }
     for (; inside; inside &= inside - 1) {
@@ -228,12 +242,14 @@ SATMESH_AVX2 void ProjectVerticesAvx2(const std::vector<Eigen::Vector3f>& vertic
     __m256 X[3], x, y, J[6];
     LoadPoints3(vertices[v].data(), &X[0], &X[1], &X[2]);
     const __m256 inside = lattice.Project(X, all, &x, &y, J);
-    const __m256 d = _mm256_fmadd_ps(X[2], _mm256_set1_ps(along.z()),
-                                     _mm256_fmadd_ps(X[1], _mm256_set1_ps(along.y()),
-                                                     _mm256_mul_ps(X[0], _mm256_set1_ps(along.x()))));
+    const __m256 d =
+        _mm256_fmadd_ps(X[2], _mm256_set1_ps(along.z()),
+                        _mm256_fmadd_ps(X[1], _mm256_set1_ps(along.y()),
+                                        _mm256_mul_ps(X[0], _mm256_set1_ps(along.x()))));
     // Interleave (x, y, depth, 0) for 8 vertices: 4x4 transposes of each half.
     const __m256 xy_lo = _mm256_unpacklo_ps(x, y), xy_hi = _mm256_unpackhi_ps(x, y);
-    const __m256 dz_lo = _mm256_unpacklo_ps(d, _mm256_setzero_ps()), dz_hi = _mm256_unpackhi_ps(d, _mm256_setzero_ps());
+    const __m256 dz_lo = _mm256_unpacklo_ps(d, _mm256_setzero_ps()),
+                 dz_hi = _mm256_unpackhi_ps(d, _mm256_setzero_ps());
     const __m256 r0 = _mm256_shuffle_ps(xy_lo, dz_lo, _MM_SHUFFLE(1, 0, 1, 0));  // vertices 0, 4
     const __m256 r1 = _mm256_shuffle_ps(xy_lo, dz_lo, _MM_SHUFFLE(3, 2, 3, 2));  // 1, 5
     const __m256 r2 = _mm256_shuffle_ps(xy_hi, dz_hi, _MM_SHUFFLE(1, 0, 1, 0));  // 2, 6
@@ -243,7 +259,8 @@ SATMESH_AVX2 void ProjectVerticesAvx2(const std::vector<Eigen::Vector3f>& vertic
     _mm256_storeu_ps(o + 8, _mm256_permute2f128_ps(r2, r3, 0x20));
     _mm256_storeu_ps(o + 16, _mm256_permute2f128_ps(r0, r1, 0x31));
     _mm256_storeu_ps(o + 24, _mm256_permute2f128_ps(r2, r3, 0x31));
-    for (int out_lanes = ~_mm256_movemask_ps(inside) & 0xff; out_lanes; out_lanes &= out_lanes - 1) {
+    for (int out_lanes = ~_mm256_movemask_ps(inside) & 0xff; out_lanes;
+         out_lanes &= out_lanes - 1) {
       const int k = __builtin_ctz(out_lanes);
       out[v + k] = ProjectVertex(view, along, vertices[v + k]);
     }

@@ -32,19 +32,15 @@ SATMESH_AVX2 inline __m256 Gather(const float* base, __m256i index, __m256 mask)
                                   base[i[5]], base[i[6]], base[i[7]]);
   return _mm256_and_ps(v, mask);
 }
-SATMESH_AVX2 inline __m256i GatherInt(const int* base, __m256i index, __m256i mask, __m256i fill) {
-  int i[8];
-  LaneIndices(index, _mm256_castsi256_ps(mask), i);
-  const __m256i v = _mm256_setr_epi32(base[i[0]], base[i[1]], base[i[2]], base[i[3]], base[i[4]],
-                                      base[i[5]], base[i[6]], base[i[7]]);
-  return _mm256_blendv_epi8(fill, v, mask);
-}
 
 // x, y, z of 8 consecutive 3-float points (24 floats from p) as three vectors.
 SATMESH_AVX2 inline void LoadPoints3(const float* p, __m256* x, __m256* y, __m256* z) {
-  const __m256 m03 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p)), _mm_loadu_ps(p + 12), 1);
-  const __m256 m14 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 4)), _mm_loadu_ps(p + 16), 1);
-  const __m256 m25 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 8)), _mm_loadu_ps(p + 20), 1);
+  const __m256 m03 =
+      _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p)), _mm_loadu_ps(p + 12), 1);
+  const __m256 m14 =
+      _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 4)), _mm_loadu_ps(p + 16), 1);
+  const __m256 m25 =
+      _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 8)), _mm_loadu_ps(p + 20), 1);
   const __m256 xy = _mm256_shuffle_ps(m14, m25, _MM_SHUFFLE(2, 1, 3, 2));
   const __m256 yz = _mm256_shuffle_ps(m03, m14, _MM_SHUFFLE(1, 0, 2, 1));
   *x = _mm256_shuffle_ps(m03, xy, _MM_SHUFFLE(2, 0, 3, 0));
@@ -52,7 +48,8 @@ SATMESH_AVX2 inline void LoadPoints3(const float* p, __m256* x, __m256* y, __m25
   *z = _mm256_shuffle_ps(yz, m25, _MM_SHUFFLE(3, 0, 3, 1));
 }
 
-// 4x8 transpose: lanes 0-3 in the low halves of r[0..3], lanes 4-7 in their high halves.
+// a_k holds 4-float records k (low half) and k + 4 (high half); f_m gets field m of the
+// 8 records, in lane order. Its own inverse (fields in, records out).
 SATMESH_AVX2 inline void Transpose4(__m256 a0, __m256 a1, __m256 a2, __m256 a3, __m256* f0,
                                     __m256* f1, __m256* f2, __m256* f3) {
   const __m256 t0 = _mm256_unpacklo_ps(a0, a1), t1 = _mm256_unpackhi_ps(a0, a1);
@@ -69,7 +66,8 @@ SATMESH_AVX2 inline __m256 Load2x4(const float* lo, const float* hi) {
 }
 
 // Fields 0-3 of 8 consecutive 4-float records (32 floats from p).
-SATMESH_AVX2 inline void LoadRecords4(const float* p, __m256* f0, __m256* f1, __m256* f2, __m256* f3) {
+SATMESH_AVX2 inline void LoadRecords4(const float* p, __m256* f0, __m256* f1, __m256* f2,
+                                      __m256* f3) {
   Transpose4(Load2x4(p, p + 16), Load2x4(p + 4, p + 20), Load2x4(p + 8, p + 24),
              Load2x4(p + 12, p + 28), f0, f1, f2, f3);
 }
@@ -82,8 +80,8 @@ SATMESH_AVX2 inline void GatherRecords4(const float* base, __m256i index, __m256
   LaneIndices(index, mask, i);
   const float* r[8];
   for (int k = 0; k < 8; ++k) r[k] = base + 4 * size_t(i[k]);
-  Transpose4(Load2x4(r[0], r[4]), Load2x4(r[1], r[5]), Load2x4(r[2], r[6]), Load2x4(r[3], r[7]),
-             f0, f1, f2, f3);
+  Transpose4(Load2x4(r[0], r[4]), Load2x4(r[1], r[5]), Load2x4(r[2], r[6]), Load2x4(r[3], r[7]), f0,
+             f1, f2, f3);
   *f0 = _mm256_and_ps(*f0, mask);
   *f1 = _mm256_and_ps(*f1, mask);
   *f2 = _mm256_and_ps(*f2, mask);
@@ -92,7 +90,8 @@ SATMESH_AVX2 inline void GatherRecords4(const float* base, __m256i index, __m256
 
 // The 8 floats at base + 8 * index[k] for each lane k, transposed: out[m] holds float m of
 // every lane's record (lanes off the mask read record 0).
-SATMESH_AVX2 inline void GatherRecords8(const float* base, __m256i index, __m256 mask, __m256* out) {
+SATMESH_AVX2 inline void GatherRecords8(const float* base, __m256i index, __m256 mask,
+                                        __m256* out) {
   int i[8];
   LaneIndices(index, mask, i);
   __m256 r[8];
@@ -129,8 +128,10 @@ SATMESH_AVX2 inline void GatherPairs(const float* base, __m256i index, __m256 ma
     return high ? _mm_loadh_pi(v, q) : _mm_loadl_pi(v, q);
   };
   const __m128 z = _mm_setzero_ps();
-  const __m256 a = _mm256_set_m128(pair(pair(z, 4, false), 5, true), pair(pair(z, 0, false), 1, true));
-  const __m256 b = _mm256_set_m128(pair(pair(z, 6, false), 7, true), pair(pair(z, 2, false), 3, true));
+  const __m256 a =
+      _mm256_set_m128(pair(pair(z, 4, false), 5, true), pair(pair(z, 0, false), 1, true));
+  const __m256 b =
+      _mm256_set_m128(pair(pair(z, 6, false), 7, true), pair(pair(z, 2, false), 3, true));
   *first = _mm256_and_ps(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0)), mask);
   *second = _mm256_and_ps(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1)), mask);
 }
@@ -165,8 +166,9 @@ struct LatticeAvx2 {
     for (int a = 0; a < 3; ++a) {
       g[a] = _mm256_mul_ps(_mm256_sub_ps(X[a], origin[a]), inv_spacing[a]);
       cell_f[a] = _mm256_floor_ps(g[a]);
-      in_lattice = _mm256_and_ps(in_lattice, _mm256_and_ps(_mm256_cmp_ps(g[a], zero, _CMP_GE_OQ),
-                                                           _mm256_cmp_ps(g[a], n_cells[a], _CMP_LT_OQ)));
+      in_lattice =
+          _mm256_and_ps(in_lattice, _mm256_and_ps(_mm256_cmp_ps(g[a], zero, _CMP_GE_OQ),
+                                                  _mm256_cmp_ps(g[a], n_cells[a], _CMP_LT_OQ)));
     }
     if (_mm256_testz_ps(in_lattice, in_lattice)) {
       *x = *y = zero;
@@ -182,8 +184,10 @@ struct LatticeAvx2 {
       d[a] = _mm256_mul_ps(_mm256_sub_ps(g[a], _mm256_add_ps(cell_f[a], half)), spacing[a]);
     GatherRecords8(cells, cell, in_lattice, record);
     for (int k = 0; k < 6; ++k) J[k] = record[2 + k];
-    *x = _mm256_fmadd_ps(J[2], d[2], _mm256_fmadd_ps(J[1], d[1], _mm256_fmadd_ps(J[0], d[0], record[0])));
-    *y = _mm256_fmadd_ps(J[5], d[2], _mm256_fmadd_ps(J[4], d[1], _mm256_fmadd_ps(J[3], d[0], record[1])));
+    *x = _mm256_fmadd_ps(J[2], d[2],
+                         _mm256_fmadd_ps(J[1], d[1], _mm256_fmadd_ps(J[0], d[0], record[0])));
+    *y = _mm256_fmadd_ps(J[5], d[2],
+                         _mm256_fmadd_ps(J[4], d[1], _mm256_fmadd_ps(J[3], d[0], record[1])));
     return in_lattice;
   }
 };

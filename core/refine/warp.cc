@@ -3,7 +3,6 @@
 #include <cstring>
 
 #include "core/common/simd.h"
-
 #include "core/refine/lattice_avx2.h"
 
 namespace satmesh {
@@ -58,11 +57,11 @@ void WarpRowScalar(const WarpContext& c, int row, int col_begin, int col_end) {
 // One row of view i, 8 pixels at a time.
 struct RowWarpAvx2 {
   const WarpContext& c;
-  size_t base;              // first pixel of the row
+  size_t base;  // first pixel of the row
   int wj;
-  const float* surface_i;   // this row's SurfacePoints (4 floats a pixel)
+  const float* surface_i;  // this row's SurfacePoints (4 floats a pixel)
   const float* cos_i;
-  const float* rays_i;      // 3 floats a pixel (unit direction)
+  const float* rays_i;  // 3 floats a pixel (unit direction)
   const float* surface_j;
   const float* image_j;
   LatticeAvx2 lattice_j;
@@ -117,7 +116,8 @@ struct RowWarpAvx2 {
     const __m256 in_lattice = lattice_j.Project(X, facing, &xj, &yj, J);
     const int outside = _mm256_movemask_ps(_mm256_andnot_ps(in_lattice, facing));
     if (_mm256_testz_ps(in_lattice, in_lattice)) return outside;
-    const __m256 max_x = _mm256_set1_ps(float(wj - 1)), max_y = _mm256_set1_ps(float(c.vj->height() - 1));
+    const __m256 max_x = _mm256_set1_ps(float(wj - 1)),
+                 max_y = _mm256_set1_ps(float(c.vj->height() - 1));
     const __m256 inside = _mm256_and_ps(
         in_lattice, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(xj, one, _CMP_GE_OQ),
                                                 _mm256_cmp_ps(yj, one, _CMP_GE_OQ)),
@@ -130,8 +130,8 @@ struct RowWarpAvx2 {
     // Visibility in j: the same face, or j's point within the tolerance.
     __m256 Xj[3], face_j_f;
     GatherRecords4(surface_j, q, inside, &Xj[0], &Xj[1], &Xj[2], &face_j_f);
-    const __m256i face_j = _mm256_blendv_epi8(minus1, _mm256_castps_si256(face_j_f),
-                                              _mm256_castps_si256(inside));
+    const __m256i face_j =
+        _mm256_blendv_epi8(minus1, _mm256_castps_si256(face_j_f), _mm256_castps_si256(inside));
     const __m256 same = _mm256_castsi256_ps(_mm256_cmpeq_epi32(face_j, face));
     const __m256 other = _mm256_andnot_ps(
         same, _mm256_and_ps(inside, _mm256_castsi256_ps(_mm256_cmpgt_epi32(face_j, minus1))));
@@ -140,7 +140,8 @@ struct RowWarpAvx2 {
       const __m256 diff = _mm256_sub_ps(Xj[a], X[a]);
       dist2 = _mm256_fmadd_ps(diff, diff, dist2);
     }
-    const __m256 near = _mm256_and_ps(other, _mm256_cmp_ps(dist2, _mm256_set1_ps(c.tol2), _CMP_LE_OQ));
+    const __m256 near =
+        _mm256_and_ps(other, _mm256_cmp_ps(dist2, _mm256_set1_ps(c.tol2), _CMP_LE_OQ));
     const __m256 used = _mm256_and_ps(inside, _mm256_or_ps(same, near));
     const int used_bits = _mm256_movemask_ps(used);
     if (!used_bits) return outside;

@@ -6,7 +6,8 @@
 // valid, and db_dn = ∂b per unit move of the hit face along its normal
 // (∇I_j · DΠ_j · ray_i / (ray_i · n)).
 // Two implementations that agree to float rounding: the scalar reference, and an
-// AVX2/FMA one (8 pixels at once, with gathers) used where the CPU has it.
+// AVX2/FMA one (8 pixels at once, lanes loaded without gathers: lattice_avx2.h) used
+// where the CPU has it.
 #include <cstdint>
 #include <vector>
 
