@@ -244,6 +244,19 @@ void DerivativeRow(const float* __restrict centred, const float* __restrict sums
   }
 }
 
+// Per row: the columns [first, last + 1) of its valid pixels ({0, 0} when none).
+void ValidSpans(const uint8_t* valid, int width, int height, std::vector<std::pair<int, int>>* spans) {
+  spans->assign(height, {0, 0});
+  for (int y = 0; y < height; ++y) {
+    const uint8_t* row = valid + size_t(y) * width;
+    int lo = 0, hi = width;
+    while (lo < width && !row[lo]) ++lo;
+    if (lo == width) continue;
+    while (!row[hi - 1]) --hi;
+    (*spans)[y] = {lo, hi};
+  }
+}
+
 }  // namespace
 
 // Streams over rows. Products: running column sums over rows y-r..y+r (add the row that
@@ -252,6 +265,11 @@ void DerivativeRow(const float* __restrict centred, const float* __restrict sums
 // rows. Coefficients: the same running column sums over that ring give ∂M/∂b of row
 // y-r. Rows outside the image are zero. Sums and statistics are float (SIMD width)
 // over centred values; column sums are re-summed exactly every kResumRows rows.
+// Only the columns that matter are computed: in each band of kResumRows rows (both
+// passes restart their column sums there), the valid pixels' columns widened by r.
+// Outside it nothing is read (window statistics and ∂M/∂b are needed at valid pixels
+// only, and reach r columns out); coefficient rows are zero there. A view's pixels
+// that see no surface (a crop is the box of a rotated footprint) cost nothing.
 void ComputeZnccFieldInto(const std::vector<float>& a_image, const std::vector<float>& b_image,
                           const std::vector<uint8_t>& valid_image, int width, int height,
                           const ZnccOptions& options, ZnccField* field_out,
@@ -267,6 +285,19 @@ void ComputeZnccFieldInto(const std::vector<float>& a_image, const std::vector<f
 
   float mean_a, mean_b;
   ValidMeans(a, b, valid, w, h, &mean_a, &mean_b);
+  // Columns [first, second) computed in each band of kResumRows rows.
+  ValidSpans(valid, w, h, &ws.row_spans);
+  const int num_bands = (h + kResumRows - 1) / kResumRows;
+  ws.band_spans.assign(num_bands, {0, 0});
+  for (int band = 0; band < num_bands; ++band) {
+    int lo = w, hi = 0;
+    for (int y = band * kResumRows; y < std::min(h, (band + 1) * kResumRows); ++y) {
+      const auto [first, last] = ws.row_spans[y];
+      if (first < last) lo = std::min(lo, first), hi = std::max(hi, last);
+    }
+    if (lo < hi) ws.band_spans[band] = {std::max(0, lo - r), std::min(w, hi + r)};
+  }
+  const auto span = [&](int y) { return ws.band_spans[y / kResumRows]; };
 
   ZnccField& field = *field_out;
   field.dM_db.resize(size_t(w) * h);
@@ -278,6 +309,8 @@ void ComputeZnccFieldInto(const std::vector<float>& a_image, const std::vector<f
   ws.columns.assign((kProducts + kCoefficients) * stride, 0.f);
   ws.rows.resize((kProducts + 2) * row_stride);
   ws.zeros.assign(std::max(3, kCoefficients) * row_stride, 0.f);
+  // Columns each coefficient ring slot may hold non-zeros in (unknown on entry).
+  ws.slot_written.assign(slots, {0, w});
   float* product_cols = ws.columns.data() + r;  // kProducts rows, x = 0 at offset r
   float* coefficient_cols = product_cols + kProducts * stride;
   float* sums = ws.rows.data();  // kProducts rows of window sums
@@ -295,23 +328,38 @@ void ComputeZnccFieldInto(const std::vector<float>& a_image, const std::vector<f
   // Running column sums of `channels` rows over the ring rows y-r..y+r; rows outside
   // the image are the zero row.
   const float* zeros = ws.zeros.data();
+  // Columns outside the band's span stay zero from the band's first row.
   const auto update_columns = [&](int y, const auto& update, int channels, float* cols) {
+    const auto [x0, x1] = span(y);
     if (y % kResumRows == 0) {
       for (int c = 0; c < channels; ++c) std::fill_n(cols + c * stride, w, 0.f);
-      for (int k = std::max(0, y - r); k <= std::min(h - 1, y + r); ++k) update(k, -1);
+      for (int k = std::max(0, y - r); k <= std::min(h - 1, y + r); ++k) update(k, -1, x0, x1);
     } else {
-      update(y + r, y - r - 1);
+      update(y + r, y - r - 1, x0, x1);
     }
   };
-  const auto update_products = [&](int enter, int leave) {
-    float* c = product_cols;
-    UpdateProductColumns(enter < h ? centred(enter) : zeros, leave >= 0 ? centred(leave) : zeros,
-                         row_stride, w, c, c + stride, c + 2 * stride, c + 3 * stride,
-                         c + 4 * stride, c + 5 * stride);
+  const auto update_products = [&](int enter, int leave, int x0, int x1) {
+    float* c = product_cols + x0;
+    UpdateProductColumns((enter < h ? centred(enter) : zeros) + x0,
+                         (leave >= 0 ? centred(leave) : zeros) + x0, row_stride, x1 - x0, c,
+                         c + stride, c + 2 * stride, c + 3 * stride, c + 4 * stride, c + 5 * stride);
   };
-  const auto update_coefficients = [&](int enter, int leave) {
-    UpdateColumns(enter < h ? coefficients(enter) : zeros, leave >= 0 ? coefficients(leave) : zeros,
-                  row_stride, kCoefficients, w, coefficient_cols, stride);
+  const auto update_coefficients = [&](int enter, int leave, int x0, int x1) {
+    UpdateColumns((enter < h ? coefficients(enter) : zeros) + x0,
+                  (leave >= 0 ? coefficients(leave) : zeros) + x0, row_stride, kCoefficients,
+                  x1 - x0, coefficient_cols + x0, stride);
+  };
+  // Before coefficient row t is written on [x0, x1): zeros where its slot held an older
+  // row outside that range.
+  const auto clear_slot = [&](int t, int x0, int x1) {
+    auto& [old0, old1] = ws.slot_written[t % slots];
+    float* k = coefficients(t);
+    for (int c = 0; c < kCoefficients; ++c) {
+      float* row = k + c * row_stride;
+      if (old0 < std::min(old1, x0)) std::fill(row + old0, row + std::min(old1, x0), 0.f);
+      if (std::max(old0, x1) < old1) std::fill(row + std::max(old0, x1), row + old1, 0.f);
+    }
+    old0 = x0, old1 = x1;
   };
 
   double sum_zncc = 0;
@@ -321,20 +369,30 @@ void ComputeZnccFieldInto(const std::vector<float>& a_image, const std::vector<f
     // Window statistics of row t: derivative coefficients into the ring.
     if (t < h) {
       if (t + r < h) centre(t + r);
-      update_columns(t, update_products, kProducts, product_cols);
-      BoxSumRows(product_cols, kProducts, stride, w, r, sums, row_stride);
-      VarianceProducts(sums, row_stride, w, eps, sigma_ab);
-      SqrtRow(sigma_ab, w);
-      num_windows += Coefficients(sums, row_stride, sigma_ab, centred(t), w, eps, min_count, zncc,
-                                  coefficients(t), row_stride);
-      sum_zncc += RowSum(zncc, w);
+      const auto [x0, x1] = span(t);
+      const int n = x1 - x0;
+      clear_slot(t, x0, x1);
+      if (n > 0) {
+        update_columns(t, update_products, kProducts, product_cols);
+        BoxSumRows(product_cols + x0, kProducts, stride, n, r, sums + x0, row_stride);
+        VarianceProducts(sums + x0, row_stride, n, eps, sigma_ab + x0);
+        SqrtRow(sigma_ab + x0, n);
+        num_windows += Coefficients(sums + x0, row_stride, sigma_ab + x0, centred(t) + x0, n, eps,
+                                    min_count, zncc + x0, coefficients(t) + x0, row_stride);
+        sum_zncc += RowSum(zncc + x0, n);
+      }
     }
     // ∂M/∂b of row y = t - r from the coefficients of rows y-r..y+r.
     const int y = t - r;
     if (y < 0) continue;
+    const auto [x0, x1] = span(y);
+    float* dM_db = &field.dM_db[size_t(y) * w];
+    std::fill(dM_db, dM_db + x0, 0.f);
+    std::fill(dM_db + std::max(x0, x1), dM_db + w, 0.f);
+    if (x1 <= x0) continue;
     update_columns(y, update_coefficients, kCoefficients, coefficient_cols);
-    BoxSumRows(coefficient_cols, kCoefficients, stride, w, r, sums, row_stride);
-    DerivativeRow(centred(y), sums, row_stride, w, &field.dM_db[size_t(y) * w]);
+    BoxSumRows(coefficient_cols + x0, kCoefficients, stride, x1 - x0, r, sums + x0, row_stride);
+    DerivativeRow(centred(y) + x0, sums + x0, row_stride, x1 - x0, dM_db + x0);
   }
   field.sum_zncc = sum_zncc;
   field.num_windows = num_windows;

@@ -5,6 +5,7 @@
 //   ∂ZNCC(x)/∂b(y) = [ (a(y)-μ_a(x)) / (σ_a σ_b) - ZNCC(x) (b(y)-μ_b(x)) / σ_b² ] / N(x)
 // summed over all windows containing y: four box filters, O(1) per pixel.
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace satmesh {
@@ -26,6 +27,7 @@ struct ZnccField {
 // size).
 struct ZnccWorkspace {
   std::vector<float> centred_ring, coefficient_ring, columns, rows, zeros;
+  std::vector<std::pair<int, int>> row_spans, band_spans, slot_written;  // column ranges
 };
 
 // a, b: reference and warped images (width*height, row-major); valid: 1 where both exist.
