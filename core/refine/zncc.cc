@@ -245,7 +245,8 @@ void DerivativeRow(const float* __restrict centred, const float* __restrict sums
 }
 
 // Per row: the columns [first, last + 1) of its valid pixels ({0, 0} when none).
-void ValidSpans(const uint8_t* valid, int width, int height, std::vector<std::pair<int, int>>* spans) {
+void ValidSpans(const uint8_t* valid, int width, int height,
+                std::vector<std::pair<int, int>>* spans) {
   spans->assign(height, {0, 0});
   for (int y = 0; y < height; ++y) {
     const uint8_t* row = valid + size_t(y) * width;
@@ -342,7 +343,8 @@ void ComputeZnccFieldInto(const std::vector<float>& a_image, const std::vector<f
     float* c = product_cols + x0;
     UpdateProductColumns((enter < h ? centred(enter) : zeros) + x0,
                          (leave >= 0 ? centred(leave) : zeros) + x0, row_stride, x1 - x0, c,
-                         c + stride, c + 2 * stride, c + 3 * stride, c + 4 * stride, c + 5 * stride);
+                         c + stride, c + 2 * stride, c + 3 * stride, c + 4 * stride,
+                         c + 5 * stride);
   };
   const auto update_coefficients = [&](int enter, int leave, int x0, int x1) {
     UpdateColumns((enter < h ? coefficients(enter) : zeros) + x0,

@@ -173,6 +173,15 @@ void BM_ComputeZnccField(benchmark::State& state) {  // 1 Mpx, window (2r+1)²
   const ImageF a = NoiseImage(1), b = NoiseImage(2);
   std::vector<uint8_t> valid(a.pixels.size(), 1);
   for (size_t i = 0; i < valid.size(); i += 7) valid[i] = 0;
+  if (state.range(1)) {  // only a square rotated by 30° is seen (64% of the crop, as on a tile)
+    const double c = std::cos(M_PI / 6), s = std::sin(M_PI / 6), half = 0.4 * kSizePx;
+    for (int y = 0; y < kSizePx; ++y)
+      for (int x = 0; x < kSizePx; ++x) {
+        const double u = x - 0.5 * kSizePx, v = y - 0.5 * kSizePx;
+        if (std::abs(c * u + s * v) > half || std::abs(-s * u + c * v) > half)
+          valid[size_t(y) * kSizePx + x] = 0;
+      }
+  }
   ZnccOptions options;
   options.window_radius = int(state.range(0));
   ZnccWorkspace workspace;
@@ -180,7 +189,7 @@ void BM_ComputeZnccField(benchmark::State& state) {  // 1 Mpx, window (2r+1)²
     benchmark::DoNotOptimize(ComputeZnccField(a.pixels, b.pixels, valid, kSizePx, kSizePx, options, &workspace));
   state.SetItemsProcessed(state.iterations() * a.pixels.size());
 }
-BENCHMARK(BM_ComputeZnccField)->ArgName("radius")->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)
+BENCHMARK(BM_ComputeZnccField)->ArgNames({"radius", "footprint"})->Args({2, 0})->Args({3, 0})->Args({2, 1})->Unit(benchmark::kMillisecond)
     ->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_RaySceneIntersect1M(benchmark::State& state) {
