@@ -97,6 +97,28 @@ TEST(ComputeZnccField, DerivativeMatchesFiniteDifferences) {
 }
 
 // Tall enough for the streaming sums to run over many rows; offset data and holes.
+// The field against ReferenceField for window radii 1-3. dirty_workspace: the workspace
+// first serves another call (the images swapped), whose rows must not leak into this one.
+void ExpectMatchesDirectEvaluation(const std::vector<float>& a, const std::vector<float>& b,
+                                   const std::vector<uint8_t>& valid, int w, int h,
+                                   bool dirty_workspace) {
+  for (int r = 1; r <= 3; ++r) {
+    ZnccOptions o;
+    o.window_radius = r;
+    o.variance_floor = 1e-3;
+    ZnccWorkspace ws;
+    if (dirty_workspace) ComputeZnccField(b, a, valid, w, h, o, &ws);
+    const ZnccField f = ComputeZnccField(a, b, valid, w, h, o, &ws);
+    const ZnccField ref = ReferenceField(a, b, valid, w, h, o);
+    ASSERT_EQ(f.num_windows, ref.num_windows) << "radius " << r;
+    EXPECT_NEAR(f.sum_zncc, ref.sum_zncc, 1e-5 * ref.num_windows) << "radius " << r;
+    float max_abs = 0;
+    for (float v : ref.dM_db) max_abs = std::max(max_abs, std::abs(v));
+    for (int p = 0; p < w * h; ++p)
+      ASSERT_NEAR(f.dM_db[p], ref.dM_db[p], 1e-4 * max_abs) << "radius " << r << " pixel " << p;
+  }
+}
+
 TEST(ComputeZnccField, MatchesDirectEvaluation) {
   const int w = 53, h = 150;
   std::mt19937 rng(3);
@@ -108,19 +130,7 @@ TEST(ComputeZnccField, MatchesDirectEvaluation) {
     b[i] = 0.7f * a[i] + 0.3f * u(rng) - 2.f;
     if (u(rng) < 0.2f || (i / w > 60 && i / w < 70)) valid[i] = 0;
   }
-  for (int r = 1; r <= 3; ++r) {
-    ZnccOptions o;
-    o.window_radius = r;
-    o.variance_floor = 1e-3;
-    const ZnccField f = ComputeZnccField(a, b, valid, w, h, o);
-    const ZnccField ref = ReferenceField(a, b, valid, w, h, o);
-    ASSERT_EQ(f.num_windows, ref.num_windows) << "radius " << r;
-    EXPECT_NEAR(f.sum_zncc, ref.sum_zncc, 1e-5 * ref.num_windows) << "radius " << r;
-    float max_abs = 0;
-    for (float v : ref.dM_db) max_abs = std::max(max_abs, std::abs(v));
-    for (int p = 0; p < w * h; ++p)
-      ASSERT_NEAR(f.dM_db[p], ref.dM_db[p], 1e-4 * max_abs) << "radius " << r << " pixel " << p;
-  }
+  ExpectMatchesDirectEvaluation(a, b, valid, w, h, /*dirty_workspace=*/false);
 }
 
 // Valid pixels on a rotated square inside the image (as a view crop around a rotated
@@ -140,21 +150,7 @@ TEST(ComputeZnccField, MatchesDirectEvaluationOnARotatedFootprint) {
       valid[i] = dx / (0.45f * w) + dy / (0.4f * h) < 1.f && u(rng) > 0.1f;
     }
   for (int x = 0; x < w; ++x) valid[20 * w + x] = 0;  // an empty row
-  for (int r = 1; r <= 3; ++r) {
-    ZnccOptions o;
-    o.window_radius = r;
-    o.variance_floor = 1e-3;
-    ZnccWorkspace ws;  // reused: stale rows of the first call must not leak into the second
-    ComputeZnccField(b, a, valid, w, h, o, &ws);
-    const ZnccField f = ComputeZnccField(a, b, valid, w, h, o, &ws);
-    const ZnccField ref = ReferenceField(a, b, valid, w, h, o);
-    ASSERT_EQ(f.num_windows, ref.num_windows) << "radius " << r;
-    EXPECT_NEAR(f.sum_zncc, ref.sum_zncc, 1e-5 * ref.num_windows) << "radius " << r;
-    float max_abs = 0;
-    for (float v : ref.dM_db) max_abs = std::max(max_abs, std::abs(v));
-    for (int p = 0; p < w * h; ++p)
-      ASSERT_NEAR(f.dM_db[p], ref.dM_db[p], 1e-4 * max_abs) << "radius " << r << " pixel " << p;
-  }
+  ExpectMatchesDirectEvaluation(a, b, valid, w, h, /*dirty_workspace=*/true);
 }
 
 }  // namespace
