@@ -7,7 +7,6 @@
 #include <limits>
 
 #include "core/refine/lattice_avx2.h"
-#include "core/refine/warp.h"
 
 namespace satmesh {
 namespace {
@@ -212,7 +211,7 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
 void RasterizeBand(const TriangleMesh& mesh, const RasterVertex* verts, const BandTarget& t) {
   size_t f = 0;
 #ifdef SATMESH_HAVE_AVX2_LATTICE
-  if (WarpHasAvx2()) {
+  if (HasAvx2Lattice()) {
     RasterizeFacesAvx2(mesh, verts, t);
     f = mesh.faces.size() / 8 * 8;
   }
@@ -279,7 +278,7 @@ void ProjectVertices(const TriangleMesh& mesh, const ViewLevel& view, const Eige
     const long end = std::min(nv, begin + kChunk);
     long v = begin;
 #ifdef SATMESH_HAVE_AVX2_LATTICE
-    if (WarpHasAvx2()) {
+    if (HasAvx2Lattice()) {
       v = begin + (end - begin) / 8 * 8;
       ProjectVerticesAvx2(mesh.vertices, view, along, begin, v, ws->vertices.data());
     }

@@ -1,9 +1,24 @@
 #pragma once
 // AVX2 building blocks of the refinement's per-pixel loops (warp.cc, hit_map_raster.cc):
 // loads of 8 lanes without vgatherdps, and the projection of 8 points through a view's
-// float projection lattice (projection_grid.h). Include only where
-// SATMESH_HAVE_AVX2_LATTICE is defined; every function is compiled for AVX2/FMA/BMI2 and
-// must only run where WarpHasAvx2() (warp.h) is true.
+// float projection lattice (projection_grid.h). They exist where SATMESH_HAVE_AVX2_LATTICE
+// is defined; each is compiled for AVX2/FMA/BMI2 and must only run where
+// HasAvx2Lattice() is true.
+namespace satmesh {
+
+// True when this CPU runs the functions below (always false off x86-64 GCC/Clang).
+inline bool HasAvx2Lattice() {
+#if defined(__x86_64__) && defined(__GNUC__)
+  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                          __builtin_cpu_supports("bmi2");
+  return has;
+#else
+  return false;
+#endif
+}
+
+}  // namespace satmesh
+
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 

@@ -194,15 +194,7 @@ SATMESH_AVX2 int WarpRowAvx2(const WarpContext& c, int row) {
 
 }  // namespace
 
-bool WarpHasAvx2() {
-#ifdef SATMESH_HAVE_AVX2_LATTICE
-  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-                          __builtin_cpu_supports("bmi2");
-  return has;
-#else
-  return false;
-#endif
-}
+bool WarpHasAvx2() { return HasAvx2Lattice(); }
 
 void WarpRow(const WarpContext& c, int row, bool vectorized) {
   int col = 0;

@@ -16,7 +16,6 @@
 #include "core/raycast/ray_scene.h"
 #include "core/refine/hit_map_raster.h"
 #include "core/refine/lattice_avx2.h"
-#include "core/refine/warp.h"
 #include "core/refine/photometric_gradient.h"
 #include "core/refine/projection_grid.h"
 #include "core/refine/thin_plate.h"
@@ -323,7 +322,7 @@ SATMESH_AVX2 void GatherLoop(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * indices.size() / 8);
 }
 void BM_Gather8Lanes(benchmark::State& state) {
-  if (!WarpHasAvx2()) return state.SkipWithError("no AVX2");
+  if (!HasAvx2Lattice()) return state.SkipWithError("no AVX2");
   state.range(0) ? GatherLoop<true>(state) : GatherLoop<false>(state);
 }
 BENCHMARK(BM_Gather8Lanes)->ArgName("vgatherdps")->Arg(0)->Arg(1);
