@@ -90,21 +90,6 @@ void RasterizeFace(const TriangleMesh& mesh, const RasterVertex* verts, int f,
 }
 
 #ifdef SATMESH_HAVE_AVX2_LATTICE
-// x, y and depth of 8 raster vertices.
-SATMESH_AVX2 inline void LoadVertices(const RasterVertex* verts, __m256i index, __m256* x,
-                                      __m256* y, __m256* depth) {
-  int i[8];
-  _mm256_storeu_si256(reinterpret_cast<__m256i*>(i), index);
-  auto row = [&](int k) { return _mm_loadu_ps(&verts[i[k]].x); };
-  const __m256 a0 = _mm256_set_m128(row(4), row(0)), a1 = _mm256_set_m128(row(5), row(1));
-  const __m256 a2 = _mm256_set_m128(row(6), row(2)), a3 = _mm256_set_m128(row(7), row(3));
-  const __m256 t0 = _mm256_unpacklo_ps(a0, a1), t1 = _mm256_unpackhi_ps(a0, a1);
-  const __m256 t2 = _mm256_unpacklo_ps(a2, a3), t3 = _mm256_unpackhi_ps(a2, a3);
-  *x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-  *y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-  *depth = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
-}
-
 // Faces [0, n - n % 8) 8 at a time: those whose box holds at most 2 x 2 pixel centres
 // (nearly all at the refinement's resolution) are tested in float without branches; the
 // others go to RasterizeFace.
@@ -112,7 +97,7 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
                                      const BandTarget& t) {
   const size_t n8 = mesh.faces.size() / 8 * 8;
   const __m256 half = _mm256_set1_ps(0.5f), one = _mm256_set1_ps(1.f), zero = _mm256_setzero_ps();
-  const __m256 minus1 = _mm256_set1_ps(-1.f);
+  const __m256 minus1 = _mm256_set1_ps(-1.f), all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
   const __m256 width = _mm256_set1_ps(float(t.width)), width_1 = _mm256_set1_ps(float(t.width - 1));
   const __m256 row_begin = _mm256_set1_ps(float(t.row_begin)),
                row_end = _mm256_set1_ps(float(t.row_end));
@@ -121,10 +106,10 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
     __m256 fi[3];
     LoadPoints3(reinterpret_cast<const float*>(mesh.faces[f].data()), &fi[0], &fi[1], &fi[2]);
     __m256i idx[3];
-    __m256 x[3], y[3], d[3];
+    __m256 x[3], y[3], d[3], unused;
     for (int k = 0; k < 3; ++k) {
       idx[k] = _mm256_castps_si256(fi[k]);
-      LoadVertices(verts, idx[k], &x[k], &y[k], &d[k]);
+      GatherRecords4(&verts[0].x, idx[k], all, &x[k], &y[k], &d[k], &unused);
     }
     const __m256 min_x = _mm256_min_ps(x[0], _mm256_min_ps(x[1], x[2]));
     const __m256 max_x = _mm256_max_ps(x[0], _mm256_max_ps(x[1], x[2]));
@@ -245,19 +230,7 @@ SATMESH_AVX2 void ProjectVerticesAvx2(const std::vector<Eigen::Vector3f>& vertic
         _mm256_fmadd_ps(X[2], _mm256_set1_ps(along.z()),
                         _mm256_fmadd_ps(X[1], _mm256_set1_ps(along.y()),
                                         _mm256_mul_ps(X[0], _mm256_set1_ps(along.x()))));
-    // Interleave (x, y, depth, 0) for 8 vertices: 4x4 transposes of each half.
-    const __m256 xy_lo = _mm256_unpacklo_ps(x, y), xy_hi = _mm256_unpackhi_ps(x, y);
-    const __m256 dz_lo = _mm256_unpacklo_ps(d, _mm256_setzero_ps()),
-                 dz_hi = _mm256_unpackhi_ps(d, _mm256_setzero_ps());
-    const __m256 r0 = _mm256_shuffle_ps(xy_lo, dz_lo, _MM_SHUFFLE(1, 0, 1, 0));  // vertices 0, 4
-    const __m256 r1 = _mm256_shuffle_ps(xy_lo, dz_lo, _MM_SHUFFLE(3, 2, 3, 2));  // 1, 5
-    const __m256 r2 = _mm256_shuffle_ps(xy_hi, dz_hi, _MM_SHUFFLE(1, 0, 1, 0));  // 2, 6
-    const __m256 r3 = _mm256_shuffle_ps(xy_hi, dz_hi, _MM_SHUFFLE(3, 2, 3, 2));  // 3, 7
-    float* o = &out[v].x;
-    _mm256_storeu_ps(o, _mm256_permute2f128_ps(r0, r1, 0x20));
-    _mm256_storeu_ps(o + 8, _mm256_permute2f128_ps(r2, r3, 0x20));
-    _mm256_storeu_ps(o + 16, _mm256_permute2f128_ps(r0, r1, 0x31));
-    _mm256_storeu_ps(o + 24, _mm256_permute2f128_ps(r2, r3, 0x31));
+    StoreRecords4(x, y, d, _mm256_setzero_ps(), &out[v].x);  // (x, y, depth, 0) each
     for (int out_lanes = ~_mm256_movemask_ps(inside) & 0xff; out_lanes;
          out_lanes &= out_lanes - 1) {
       const int k = __builtin_ctz(out_lanes);

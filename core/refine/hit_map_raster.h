@@ -28,7 +28,7 @@ struct RasterWorkspace {
   std::vector<float> depth;            // z-buffer, per pixel
 };
 
-// Fills view->hit_map (hits, points, faces) for the mesh's current vertices, like
+// Fills view->hit_map (hits, surface) for the mesh's current vertices, like
 // CastHitMap, and ray_cos too when face_normals is not null. Parallel over
 // row bands with OpenMP.
 void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace,

@@ -87,6 +87,16 @@ SATMESH_AVX2 inline void LoadRecords4(const float* p, __m256* f0, __m256* f1, __
              Load2x4(p + 12, p + 28), f0, f1, f2, f3);
 }
 
+// The inverse of LoadRecords4: fields 0-3 of 8 records into 32 floats from p.
+SATMESH_AVX2 inline void StoreRecords4(__m256 f0, __m256 f1, __m256 f2, __m256 f3, float* p) {
+  __m256 r[4];
+  Transpose4(f0, f1, f2, f3, &r[0], &r[1], &r[2], &r[3]);
+  for (int k = 0; k < 4; ++k) {
+    _mm_storeu_ps(p + 4 * k, _mm256_castps256_ps128(r[k]));
+    _mm_storeu_ps(p + 16 + 4 * k, _mm256_extractf128_ps(r[k], 1));
+  }
+}
+
 // Fields 0-3 of the 4-float records base + 4 * index[k] (lanes off the mask read record
 // 0 and give 0).
 SATMESH_AVX2 inline void GatherRecords4(const float* base, __m256i index, __m256 mask, __m256* f0,

@@ -71,9 +71,10 @@ double CastHitMap(const RayScene& scene, ViewLevel* view,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < long(n); ++i) {
-    map.surface[i].face = map.hits[i].face;
-    if (map.hits[i].hit()) map.surface[i].point = rays[i].origin + map.hits[i].t * rays[i].direction;
-    if (face_normals) map.ray_cos[i] = RayCosine(rays[i].direction, map.hits[i].face, *face_normals);
+    const RayHit& hit = map.hits[i];
+    map.surface[i].face = hit.face;
+    if (hit.hit()) map.surface[i].point = rays[i].origin + hit.t * rays[i].direction;
+    if (face_normals) map.ray_cos[i] = RayCosine(rays[i].direction, hit.face, *face_normals);
   }
   return intersect_s;
 }
