@@ -244,17 +244,22 @@ void DerivativeRow(const float* __restrict centred, const float* __restrict sums
   }
 }
 
-// Per row: the columns [first, last + 1) of its valid pixels ({0, 0} when none).
-void ValidSpans(const uint8_t* valid, int width, int height,
-                std::vector<std::pair<int, int>>* spans) {
-  spans->assign(height, {0, 0});
-  for (int y = 0; y < height; ++y) {
-    const uint8_t* row = valid + size_t(y) * width;
-    int lo = 0, hi = width;
-    while (lo < width && !row[lo]) ++lo;
-    if (lo == width) continue;
-    while (!row[hi - 1]) --hi;
-    (*spans)[y] = {lo, hi};
+// Per band of kResumRows rows: the columns [first, second) of its valid pixels,
+// widened by r and clipped to the image ({0, 0} when the band has none).
+void BandSpans(const uint8_t* valid, int width, int height, int r,
+               std::vector<std::pair<int, int>>* spans) {
+  spans->assign((height + kResumRows - 1) / kResumRows, {0, 0});
+  for (size_t band = 0; band < spans->size(); ++band) {
+    int lo = width, hi = 0;
+    for (int y = int(band) * kResumRows; y < std::min(height, int(band + 1) * kResumRows); ++y) {
+      const uint8_t* row = valid + size_t(y) * width;
+      int first = 0, last = width;  // the row's valid pixels lie in [first, last)
+      while (first < width && !row[first]) ++first;
+      if (first == width) continue;
+      while (!row[last - 1]) --last;
+      lo = std::min(lo, first), hi = std::max(hi, last);
+    }
+    if (lo < hi) (*spans)[band] = {std::max(0, lo - r), std::min(width, hi + r)};
   }
 }
 
@@ -287,17 +292,7 @@ void ComputeZnccFieldInto(const std::vector<float>& a_image, const std::vector<f
   float mean_a, mean_b;
   ValidMeans(a, b, valid, w, h, &mean_a, &mean_b);
   // Columns [first, second) computed in each band of kResumRows rows.
-  ValidSpans(valid, w, h, &ws.row_spans);
-  const int num_bands = (h + kResumRows - 1) / kResumRows;
-  ws.band_spans.assign(num_bands, {0, 0});
-  for (int band = 0; band < num_bands; ++band) {
-    int lo = w, hi = 0;
-    for (int y = band * kResumRows; y < std::min(h, (band + 1) * kResumRows); ++y) {
-      const auto [first, last] = ws.row_spans[y];
-      if (first < last) lo = std::min(lo, first), hi = std::max(hi, last);
-    }
-    if (lo < hi) ws.band_spans[band] = {std::max(0, lo - r), std::min(w, hi + r)};
-  }
+  BandSpans(valid, w, h, r, &ws.band_spans);
   const auto span = [&](int y) { return ws.band_spans[y / kResumRows]; };
 
   ZnccField& field = *field_out;

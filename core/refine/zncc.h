@@ -27,7 +27,7 @@ struct ZnccField {
 // size).
 struct ZnccWorkspace {
   std::vector<float> centred_ring, coefficient_ring, columns, rows, zeros;
-  std::vector<std::pair<int, int>> row_spans, band_spans, slot_written;  // column ranges
+  std::vector<std::pair<int, int>> band_spans, slot_written;  // column ranges
 };
 
 // a, b: reference and warped images (width*height, row-major); valid: 1 where both exist.

@@ -96,7 +96,6 @@ TEST(ComputeZnccField, DerivativeMatchesFiniteDifferences) {
   EXPECT_GT(checked, 20);
 }
 
-// Tall enough for the streaming sums to run over many rows; offset data and holes.
 // The field against ReferenceField for window radii 1-3. dirty_workspace: the workspace
 // first serves another call (the images swapped), whose rows must not leak into this one.
 void ExpectMatchesDirectEvaluation(const std::vector<float>& a, const std::vector<float>& b,
@@ -119,6 +118,7 @@ void ExpectMatchesDirectEvaluation(const std::vector<float>& a, const std::vecto
   }
 }
 
+// Tall enough for the streaming sums to run over many rows; offset data and holes.
 TEST(ComputeZnccField, MatchesDirectEvaluation) {
   const int w = 53, h = 150;
   std::mt19937 rng(3);
