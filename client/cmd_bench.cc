@@ -66,15 +66,19 @@ std::string ResolveJob(const Args& args, const std::string& out, nlohmann::json*
 }
 
 void PrintLevels(const RefineResult& refine) {
-  std::printf("\n%5s %5s %9s %9s %6s %15s | per iteration [s]: %8s %8s %8s %8s %8s | %9s %8s\n",
+  std::printf("\n%5s %5s %9s %9s %6s %15s | per iteration [s]: %8s %8s %8s %8s %8s | %9s %8s"
+              " | initial surface\n",
               "level", "iters", "vertices", "faces", "GSD_m", "mean ZNCC", "raycast", "gradient",
               "smooth", "update", "total", "intersect", "level_s");
   for (const auto& level : refine.levels) {
     const StageTimes t = PerIteration(level);
-    std::printf("%5d %5d %9d %9d %6.2f %7.4f->%7.4f | %18s %8.3f %8.3f %8.3f %8.3f %8.3f | %9.3f %8.1f\n",
+    std::printf("%5d %5d %9d %9d %6.2f %7.4f->%7.4f | %18s %8.3f %8.3f %8.3f %8.3f %8.3f | %9.3f %8.1f",
                 level.level, level.iterations, level.num_vertices, level.num_faces, level.gsd_m,
                 level.mean_zncc.front(), level.mean_zncc.back(), "", t.raycast_s, t.gradient_s,
                 t.smoothness_s, t.update_s, Sum(t), t.intersect_s, level.level_s);
+    if (std::isnan(level.initial_zncc)) std::printf(" |\n");
+    else std::printf(" | ZNCC %.4f, %s (%.1f s)\n", level.initial_zncc,
+                     level.restarted ? "restarted from it" : "not used", level.initial_check_s);
   }
 }
 
@@ -159,6 +163,9 @@ int RunBench(const std::vector<std::string>& argv) {
                         {"per_iteration_s", {{"raycast", t.raycast_s}, {"gradient", t.gradient_s},
                                              {"smoothness", t.smoothness_s}, {"update", t.update_s},
                                              {"total", Sum(t)}, {"intersect", t.intersect_s}}},
+                        {"initial_zncc", level.initial_zncc},
+                        {"restarted_from_initial", level.restarted},
+                        {"initial_check_s", level.initial_check_s},
                         {"level_s", level.level_s}});
     }
     report["levels"] = levels;

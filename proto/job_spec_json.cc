@@ -71,6 +71,7 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "rasterize_hit_maps") r->rasterize_hit_maps = Boolean(v, path);
     else if (key == "coarse_edge_px") r->coarse_edge_px = Number(v, path);
     else if (key == "remesh_coarse") r->remesh_coarse = Boolean(v, path);
+    else if (key == "restart_from_initial") r->restart_from_initial = Boolean(v, path);
     else if (key == "normalize_by_pair_count") r->normalize_by_pair_count = Boolean(v, path);
     else if (key == "hold_boundary_xy") r->hold_boundary_xy = Boolean(v, path);
     else if (key == "estimate_bias") r->estimate_bias = Boolean(v, path);
@@ -213,11 +214,14 @@ json LevelsToJson(const std::vector<LevelStats>& levels) {
                    {"mean_zncc", l.mean_zncc},
                    {"mean_zncc_start", l.mean_zncc.empty() ? 0.0 : l.mean_zncc.front()},
                    {"mean_zncc_end", l.mean_zncc.empty() ? 0.0 : l.mean_zncc.back()},
+                   {"initial_zncc", l.initial_zncc},  // NaN (null): not compared
+                   {"restarted_from_initial", l.restarted},
                    {"time_s", {{"raycast", l.times.raycast_s},
                                {"intersect", l.times.intersect_s},
                                {"gradient", l.times.gradient_s},
                                {"smoothness", l.times.smoothness_s},
                                {"update", l.times.update_s},
+                               {"initial_check", l.initial_check_s},
                                {"level", l.level_s}}}});
   }
   return out;

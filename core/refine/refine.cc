@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "core/common/error.h"
@@ -21,6 +22,11 @@
 
 namespace satmesh {
 namespace {
+
+// A level restarts from the initial surface only if its mean ZNCC is higher by more than
+// this: about what meshing the same surface differently changes (a DSM's grid mesh vs its
+// remeshed version: 0.0004-0.0007 on the Pléiades triplet).
+constexpr double kRestartMargin = 0.001;
 
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
@@ -119,10 +125,34 @@ std::vector<ViewSource> MakeViewSources(const RefineInput& input, int levels) {
   return sources;
 }
 
-LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
+// Mean ZNCC of `mesh` over `pairs` at `level`, without changing anything; hit maps
+// rasterized or cast with Embree.
+double LevelZncc(const RefineInput& input, const std::vector<ViewSource>& sources,
+                 const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
+                 double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize) {
+  std::vector<int> slot;
+  std::vector<ViewLevel> views =
+      MakeViewLevels(input, sources, pairs, mesh, level, options.virtual_camera_grid_px, &slot);
+  const auto normals = FaceNormals(mesh);
+  if (rasterize) {
+    std::vector<RasterWorkspace> raster;
+    RasterizeHitMaps(mesh, &views, &raster, &normals);
+  } else {
+    const RayScene scene(mesh);
+    for (auto& v : views) CastHitMap(scene, &v, &normals);
+  }
+  return PhotometricPass(views, slot, pairs, mesh, normals,
+                         PhotometricOptionsAt(options, level_gsd_m), nullptr, nullptr);
+}
+
+// The iterations of one level. Returns false, before changing the mesh, if the mean ZNCC
+// of the level's first iteration is below `abandon_below` (NaN: never).
+bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, TriangleMesh* mesh,
+                 LevelStats* stats_out) {
   const auto level_start = Clock::now();
   const RefineOptions& opt = ctx.options;
-  LevelStats stats;
+  LevelStats& stats = *stats_out;
+  stats = LevelStats{};
   stats.level = level;
   stats.gsd_m = ctx.gsd_m * std::ldexp(1.0, level);
   const double gsd = stats.gsd_m;
@@ -163,6 +193,7 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
                                         last ? nullptr : &gradient, last ? nullptr : &seen);
     stats.mean_zncc.push_back(zncc);
     stats.times.gradient_s += Seconds(t0);
+    if (it == 0 && zncc < abandon_below) return false;
     if (last) break;
 
     t0 = Clock::now();
@@ -194,7 +225,25 @@ LevelStats RefineLevel(const LevelContext& ctx, int level, TriangleMesh* mesh) {
   spdlog::info("level {}: {} vertices, {} faces, GSD {:.2f} m, mean ZNCC {:.4f} -> {:.4f} ({:.1f} s)",
                level, stats.num_vertices, stats.num_faces, gsd, stats.mean_zncc.front(),
                stats.mean_zncc.back(), stats.level_s);
-  return stats;
+  return true;
+}
+
+// `mesh` remeshed isotropically to the triangle edge of `level` (coarse_edge_px level
+// pixels), unless options.remesh_coarse is off.
+TriangleMesh RemeshForLevel(TriangleMesh mesh, const RefineOptions& options, double gsd_m,
+                            int level, const Progress& progress) {
+  if (!options.remesh_coarse) return mesh;
+  CoarseMeshOptions coarse;
+  coarse.target_edge_m = options.coarse_edge_px * gsd_m * std::ldexp(1.0, level);
+  return RemeshIsotropic(mesh, coarse, progress);
+}
+
+// The initial surface meshed for `level` (before remeshing): what a level below the
+// coarsest measures and, if it wins, restarts from.
+TriangleMesh InitialSurfaceAt(const RefineInput& input, const RefineOptions& options,
+                              double gsd_m, int level) {
+  if (!input.initial_for_edge) return input.initial_mesh;
+  return input.initial_for_edge(options.coarse_edge_px * gsd_m * std::ldexp(1.0, level));
 }
 
 }  // namespace
@@ -204,17 +253,10 @@ double MeasureMeanZncc(const RefineInput& input, const TriangleMesh& mesh,
                        const RefineOptions& options) {
   const std::string problem = options.Check();
   SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "refine options: " + problem);
-  const std::vector<ViewSource> sources = MakeViewSources(input, level);
-  std::vector<int> slot;
-  std::vector<ViewLevel> views =
-      MakeViewLevels(input, sources, pairs, mesh, level, options.virtual_camera_grid_px, &slot);
   const double gsd = GroundSamplingDistance(input.views[pairs.front().first].rpc, input.frame) *
                      std::ldexp(1.0, level);
-  RayScene scene(mesh);
-  const auto normals = FaceNormals(mesh);
-  for (auto& v : views) CastHitMap(scene, &v, &normals);
-  return PhotometricPass(views, slot, pairs, mesh, normals, PhotometricOptionsAt(options, gsd),
-                         nullptr, nullptr);
+  return LevelZncc(input, MakeViewSources(input, level), pairs, options, gsd, level, mesh,
+                   /*rasterize=*/false);
 }
 
 RefineResult Refine(const RefineInput& input, const RefineOptions& options,
@@ -244,19 +286,47 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
   spdlog::info("refine: {} views, {} pairs, GSD {:.3f} m", input.views.size(),
                result.pairs.size(), result.gsd_m);
 
-  TriangleMesh mesh = input.initial_mesh;
-  if (options.remesh_coarse) {
-    CoarseMeshOptions coarse;
-    coarse.target_edge_m = options.coarse_edge_px * result.gsd_m * std::ldexp(1.0, options.levels);
-    mesh = RemeshIsotropic(mesh, coarse, progress);
-  }
+  // Coarse to fine. Below the coarsest level, the previous level's result (subdivided)
+  // competes with the initial surface: a DSM as sharp as the images loses detail on the
+  // coarse levels that their iterations do not win back (BENCHMARKS.md, Pléiades).
+  TriangleMesh mesh =
+      RemeshForLevel(input.initial_mesh, options, result.gsd_m, options.levels, progress);
   const LevelContext ctx{input, options, progress, sources, result.pairs, result.gsd_m};
   for (int level = options.levels; level >= 0; --level) {
+    const auto level_start = Clock::now();
+    double initial_zncc = std::numeric_limits<double>::quiet_NaN(), check_s = 0;
+    TriangleMesh initial;
     if (level < options.levels) {
       mesh = Subdivide1To4(mesh);
       SortSpatially(&mesh);
+      if (options.restart_from_initial) {
+        const auto t0 = Clock::now();
+        initial = InitialSurfaceAt(input, options, result.gsd_m, level);
+        initial_zncc = LevelZncc(input, sources, result.pairs, options,
+                                 result.gsd_m * std::ldexp(1.0, level), level, initial,
+                                 options.rasterize_hit_maps);
+        check_s = Seconds(t0);
+      }
     }
-    result.levels.push_back(RefineLevel(ctx, level, &mesh));
+    LevelStats stats;
+    bool restarted = false;
+    if (!RefineLevel(ctx, level, initial_zncc - kRestartMargin, &mesh, &stats)) {
+      spdlog::info("level {}: the initial surface's mean ZNCC {:.4f} beats the previous "
+                   "level's {:.4f}; restarting from it",
+                   level, initial_zncc, stats.mean_zncc.front());
+      mesh = RemeshForLevel(std::move(initial), options, result.gsd_m, level, progress);
+      RefineLevel(ctx, level, std::numeric_limits<double>::quiet_NaN(), &mesh, &stats);
+      restarted = true;
+    } else if (!std::isnan(initial_zncc)) {
+      spdlog::info("level {}: kept the previous level's result (initial surface: mean ZNCC "
+                   "{:.4f}, {:.1f} s to measure)",
+                   level, initial_zncc, check_s);
+    }
+    stats.initial_zncc = initial_zncc;
+    stats.restarted = restarted;
+    stats.initial_check_s = check_s;
+    stats.level_s = Seconds(level_start);
+    result.levels.push_back(std::move(stats));
   }
   result.mesh = std::move(mesh);
   result.total_s = Seconds(start);

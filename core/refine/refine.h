@@ -1,6 +1,8 @@
 #pragma once
 // The refinement: photometric multi-view mesh refinement under the RFM (Rothermel et al.
 // 2020), coarse to fine. One entry point, Refine(); everything runs in a LocalFrame.
+#include <functional>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,6 +25,9 @@ struct RefineView {
 struct RefineInput {
   std::vector<RefineView> views;
   TriangleMesh initial_mesh;  // vertices in `frame` (x east, y north, z up; metres)
+  // The initial surface meshed for triangles of about edge_m metres (in `frame`), for a
+  // level that restarts from it (RefineOptions::restart_from_initial); empty: initial_mesh.
+  std::function<TriangleMesh(double edge_m)> initial_for_edge;
   LocalFrame frame;
   double min_z = 0, max_z = 0;  // height range (frame z) the surface stays within
 };
@@ -38,8 +43,13 @@ struct LevelStats {
   int num_vertices = 0, num_faces = 0;
   double gsd_m = 0;                    // ground sampling distance of the level
   std::vector<double> mean_zncc;       // before each iteration, and after the last
+  // Mean ZNCC of the initial surface at this level, when compared with the previous
+  // level's result (NaN: not compared); restarted: the level started from it.
+  double initial_zncc = std::numeric_limits<double>::quiet_NaN();
+  bool restarted = false;
+  double initial_check_s = 0;          // meshing and measuring the initial surface
   StageTimes times;
-  double level_s = 0;
+  double level_s = 0;                  // all of the level, initial_check_s included
 };
 
 struct RefineResult {

@@ -32,6 +32,9 @@ struct RefineOptions {
                                    // (hit_map_raster.h); false: Embree ray casting
   double coarse_edge_px = 2.0;     // edge length of the coarse mesh at level L, in level px, > 0
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
+  bool restart_from_initial = true;  // below the coarsest level, continue from the initial
+                                     // surface (remeshed at the level) instead of the previous
+                                     // level's result when its mean ZNCC is higher (refine.cc)
   bool normalize_by_pair_count = true;  // divide each vertex's photometric gradient by the
                                         // number of pair-directions that saw it (OpenMVS)
   bool hold_boundary_xy = true;    // boundary vertices move vertically only (tile seams)

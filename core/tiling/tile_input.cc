@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "core/common/error.h"
 #include "core/geo/crs.h"
@@ -37,6 +38,20 @@ PixelWindow WindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vector3d>
   w.width = std::max(0, c1 - w.col0);
   w.height = std::max(0, r1 - w.row0);
   return w;
+}
+
+// The DSM, block-averaged by `factor`, as a mesh in `frame`.
+TriangleMesh DsmMeshInFrame(const Dsm& dsm, int factor, const LocalFrame& frame) {
+  const CrsTransform geo_from_dsm(dsm.crs_wkt, kWgs84Geographic3D);
+  TriangleMesh mesh = MeshFromDsm(DownsampleDsm(dsm, factor));
+  std::vector<Eigen::Vector3d> points(mesh.vertices.size());
+  for (size_t i = 0; i < points.size(); ++i) points[i] = mesh.AbsoluteVertex(i);
+  geo_from_dsm.Apply(&points);
+  mesh.origin.setZero();
+  mesh.crs.clear();
+  for (size_t i = 0; i < points.size(); ++i)
+    mesh.vertices[i] = frame.LocalFromGeo(points[i]).cast<float>();
+  return mesh;
 }
 
 }  // namespace
@@ -110,17 +125,17 @@ TileInput PrepareTileInput(const JobSpec& spec, const Dsm& dsm, double coarse_ce
     tile.view_names.push_back(image.path);
   }
 
-  // Initial mesh: the DSM at the coarse cell size, into the local frame.
-  const int factor = std::max(1, int(std::floor(coarse_cell_m / std::abs(dsm.geo_transform[1]))));
-  TriangleMesh mesh = MeshFromDsm(DownsampleDsm(dsm, factor));
-  std::vector<Eigen::Vector3d> points(mesh.vertices.size());
-  for (size_t i = 0; i < points.size(); ++i) points[i] = mesh.AbsoluteVertex(i);
-  geo_from_dsm.Apply(&points);
-  mesh.origin.setZero();
-  mesh.crs.clear();
-  for (size_t i = 0; i < points.size(); ++i)
-    mesh.vertices[i] = tile.refine.frame.LocalFromGeo(points[i]).cast<float>();
-  tile.refine.initial_mesh = std::move(mesh);
+  // Initial mesh: the DSM at the coarse cell size, into the local frame; finer levels
+  // that restart from the initial surface mesh it at half their triangle edge.
+  const double cell_m = std::abs(dsm.geo_transform[1]);
+  const auto cell_factor = [cell_m](double size_m) {
+    return std::max(1, int(std::floor(size_m / cell_m)));
+  };
+  tile.refine.initial_mesh = DsmMeshInFrame(dsm, cell_factor(coarse_cell_m), tile.refine.frame);
+  tile.refine.initial_for_edge = [dsm = std::make_shared<const Dsm>(dsm), cell_factor,
+                                  frame = tile.refine.frame](double edge_m) {
+    return DsmMeshInFrame(*dsm, cell_factor(0.5 * edge_m), frame);
+  };
   return tile;
 }
 

@@ -71,6 +71,39 @@ TEST(Refine, TiltedPlaneStartedMetresOffConverges) {
     EXPECT_GT(level.mean_zncc.back(), level.mean_zncc.front()) << "level " << level.level;
 }
 
+// A level below the coarsest restarts from the initial surface when that explains the
+// images better than the previous level's result. Here the coarse start (initial_mesh) is
+// 3 m (6 GSD) off, one iteration per level cannot bring it back, and the surface for the
+// finer levels (initial_for_edge) is exact.
+TEST(Refine, RestartsFromTheInitialSurfaceWhenItExplainsTheImagesBetter) {
+  const testing::Plane plane;
+  auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                       testing::PlaneMesh(plane, 40, 1.0, 3.0));
+  input.initial_for_edge = [&plane](double edge_m) {
+    return testing::PlaneMesh(plane, 40, 0.5 * edge_m, 0.0);
+  };
+  RefineOptions o = SmallOptions();
+  o.iterations_per_level = 1;
+  const RefineResult result = Refine(input, o);
+  ASSERT_EQ(result.levels.size(), 3u);
+  EXPECT_TRUE(std::isnan(result.levels[0].initial_zncc));  // the coarsest: nothing to compare
+  EXPECT_FALSE(result.levels[0].restarted);
+  EXPECT_TRUE(result.levels[1].restarted);
+  EXPECT_GT(result.levels[1].initial_zncc, 0.9);
+  EXPECT_NEAR(result.levels[1].mean_zncc.front(), result.levels[1].initial_zncc, 0.02);
+  EXPECT_FALSE(std::isnan(result.levels[2].initial_zncc));
+  const auto [mean, p95] = PlaneError(result.mesh, plane, 30);
+  EXPECT_LT(mean, 0.05);  // 0.1 GSD
+
+  o.restart_from_initial = false;
+  const RefineResult chained = Refine(input, o);
+  for (const auto& level : chained.levels) {
+    EXPECT_FALSE(level.restarted);
+    EXPECT_TRUE(std::isnan(level.initial_zncc));
+  }
+  EXPECT_GT(PlaneError(chained.mesh, plane, 30).first, 0.5);  // still metres off
+}
+
 // The default rasterized hit maps and Embree's ray casting give the same refinement.
 TEST(Refine, RasterizedAndRayCastHitMapsAgree) {
   const testing::Plane plane;

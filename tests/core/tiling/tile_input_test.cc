@@ -1,0 +1,50 @@
+#include "core/tiling/tile_input.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/geo/crs.h"
+
+namespace satmesh {
+namespace {
+
+// A 100 x 80 DSM of 0.5 m cells in UTM 31N with relief in both directions.
+Dsm TestDsm() {
+  Dsm dsm;
+  dsm.width = 100, dsm.height = 80;
+  dsm.geo_transform = {698000, 0.5, 0, 4792900, 0, -0.5};
+  dsm.crs_wkt = CrsToWkt("EPSG:32631");
+  dsm.z.resize(size_t(dsm.width) * dsm.height);
+  for (int j = 0; j < dsm.height; ++j)
+    for (int i = 0; i < dsm.width; ++i) dsm.at(i, j) = float(80 + 0.1 * i + 3 * std::sin(0.3 * j));
+  return dsm;
+}
+
+// A level that restarts from the initial surface gets the DSM meshed at half the level's
+// triangle edge, in the frame of the coarse initial mesh.
+TEST(TileInput, InitialSurfaceForAnEdgeIsTheDsmAtHalfThatEdge) {
+  const Dsm dsm = TestDsm();
+  JobSpec spec;  // no image: only the surface is prepared
+  spec.initial_dsm = "test.tif";
+  const TileInput coarse = PrepareTileInput(spec, dsm, /*coarse_cell_m=*/2.0);
+  const TileInput fine = PrepareTileInput(spec, dsm, /*coarse_cell_m=*/0.5);
+  ASSERT_TRUE(coarse.refine.initial_for_edge);
+  EXPECT_EQ(coarse.refine.initial_mesh.vertices.size(), 25u * 20u);
+  EXPECT_EQ(fine.refine.initial_mesh.vertices.size(), 100u * 80u);
+
+  const TriangleMesh at_1m = coarse.refine.initial_for_edge(1.0);  // 0.5 m cells: all of it
+  ASSERT_EQ(at_1m.vertices.size(), fine.refine.initial_mesh.vertices.size());
+  EXPECT_EQ(at_1m.faces.size(), fine.refine.initial_mesh.faces.size());
+  double max_diff = 0;
+  for (size_t i = 0; i < at_1m.vertices.size(); ++i)
+    max_diff = std::max(max_diff,
+                        double((at_1m.vertices[i] - fine.refine.initial_mesh.vertices[i]).norm()));
+  EXPECT_LT(max_diff, 1e-4);
+  EXPECT_EQ(coarse.refine.initial_for_edge(4.0).vertices.size(), 25u * 20u);  // 2 m cells
+  EXPECT_EQ(coarse.refine.initial_for_edge(3.0).vertices.size(), 34u * 27u);  // 1.5 m cells
+  EXPECT_EQ(coarse.refine.initial_for_edge(0.6).vertices.size(), 100u * 80u);  // never finer
+}
+
+}  // namespace
+}  // namespace satmesh
