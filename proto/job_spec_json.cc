@@ -71,6 +71,7 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "rasterize_hit_maps") r->rasterize_hit_maps = Boolean(v, path);
     else if (key == "coarse_edge_px") r->coarse_edge_px = Number(v, path);
     else if (key == "remesh_coarse") r->remesh_coarse = Boolean(v, path);
+    else if (key == "alternate_directions") r->alternate_directions = Boolean(v, path);
     else if (key == "restart_from_initial") r->restart_from_initial = Boolean(v, path);
     else if (key == "normalize_by_pair_count") r->normalize_by_pair_count = Boolean(v, path);
     else if (key == "hold_boundary_xy") r->hold_boundary_xy = Boolean(v, path);

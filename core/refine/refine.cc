@@ -67,9 +67,15 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
                        const std::vector<std::pair<int, int>>& pairs, const TriangleMesh& mesh,
                        const std::vector<Eigen::Vector3f>& normals,
                        const PhotometricOptions& options, std::vector<Eigen::Vector3d>* gradient,
-                       std::vector<int>* seen) {
+                       std::vector<int>* seen, int one_direction = -1) {
+  // one_direction >= 0: pair k only as (i, j) if (one_direction + k) is even, else (j, i).
   std::vector<std::pair<int, int>> directions;
-  for (const auto& [i, j] : pairs) directions.insert(directions.end(), {{i, j}, {j, i}});
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    const auto [i, j] = pairs[k];
+    if (one_direction < 0) directions.insert(directions.end(), {{i, j}, {j, i}});
+    else if ((one_direction + k) % 2 == 0) directions.push_back({i, j});
+    else directions.push_back({j, i});
+  }
   const bool accumulate = gradient || seen;
   double sum = 0;
   long count = 0;
@@ -189,8 +195,11 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     t0 = Clock::now();
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
     std::fill(seen.begin(), seen.end(), 0);
+    // Iterations between the first and the last take one direction per pair, alternating.
+    const bool half = opt.alternate_directions && it > 0 && !last;
     const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, normals, photo,
-                                        last ? nullptr : &gradient, last ? nullptr : &seen);
+                                        last ? nullptr : &gradient, last ? nullptr : &seen,
+                                        half ? it % 2 : -1);
     stats.mean_zncc.push_back(zncc);
     stats.times.gradient_s += Seconds(t0);
     if (it == 0 && zncc < abandon_below) return false;

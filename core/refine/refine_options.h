@@ -35,6 +35,10 @@ struct RefineOptions {
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) instead of the previous
                                      // level's result when its mean ZNCC is higher (refine.cc)
+  bool alternate_directions = true;  // iterations other than a level's first and last use
+                                     // one direction per pair, alternating (half the work;
+                                     // same accuracy on synthetic scenes, BENCHMARKS.md);
+                                     // false: both directions every iteration (the paper)
   bool normalize_by_pair_count = true;  // divide each vertex's photometric gradient by the
                                         // number of pair-directions that saw it (OpenMVS)
   bool hold_boundary_xy = true;    // boundary vertices move vertically only (tile seams)
