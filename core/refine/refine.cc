@@ -237,13 +237,18 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   return true;
 }
 
-// `mesh` remeshed isotropically to the triangle edge of `level` (coarse_edge_px level
-// pixels), unless options.remesh_coarse is off.
+// Triangle edge of `level`, metres: coarse_edge_px level pixels.
+double LevelEdge(const RefineOptions& options, double gsd_m, int level) {
+  return options.coarse_edge_px * gsd_m * std::ldexp(1.0, level);
+}
+
+// `mesh` remeshed isotropically to the triangle edge of `level`, unless
+// options.remesh_coarse is off.
 TriangleMesh RemeshForLevel(TriangleMesh mesh, const RefineOptions& options, double gsd_m,
                             int level, const Progress& progress) {
   if (!options.remesh_coarse) return mesh;
   CoarseMeshOptions coarse;
-  coarse.target_edge_m = options.coarse_edge_px * gsd_m * std::ldexp(1.0, level);
+  coarse.target_edge_m = LevelEdge(options, gsd_m, level);
   return RemeshIsotropic(mesh, coarse, progress);
 }
 
@@ -252,7 +257,7 @@ TriangleMesh RemeshForLevel(TriangleMesh mesh, const RefineOptions& options, dou
 TriangleMesh InitialSurfaceAt(const RefineInput& input, const RefineOptions& options,
                               double gsd_m, int level) {
   if (!input.initial_for_edge) return input.initial_mesh;
-  return input.initial_for_edge(options.coarse_edge_px * gsd_m * std::ldexp(1.0, level));
+  return input.initial_for_edge(LevelEdge(options, gsd_m, level));
 }
 
 }  // namespace
