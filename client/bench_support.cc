@@ -12,6 +12,7 @@
 
 #include "core/common/error.h"
 #include "core/dsm/dsm.h"
+#include "core/dsm/fill_holes.h"
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
 #include "core/raycast/ray_scene.h"
@@ -43,7 +44,8 @@ TriangleMesh IntoFrame(const TriangleMesh& mesh, const std::string& crs, const L
 }  // namespace
 
 TileInput PrepareJobInput(const JobSpec& spec) {
-  const Dsm dsm = ReadDsm(spec.initial_dsm);
+  Dsm dsm = ReadDsm(spec.initial_dsm);
+  FillDsmHoles(&dsm, spec.fill_holes_m);
   const double cell = std::abs(dsm.geo_transform[1]);
   const double coarse_cell = 0.5 * spec.refine.coarse_edge_px * cell * std::ldexp(1.0, spec.refine.levels);
   return PrepareTileInput(spec, dsm, coarse_cell);
@@ -52,12 +54,14 @@ TileInput PrepareJobInput(const JobSpec& spec) {
 TriangleMesh LoadMeshInFrame(const std::string& path, const JobSpec& spec,
                              const std::string& default_crs, const LocalFrame& frame) {
   namespace fs = std::filesystem;
-  std::string file = path == "initial" ? spec.initial_dsm : path;
+  const bool filled = path == "initial-filled";
+  std::string file = path == "initial" || filled ? spec.initial_dsm : path;
   if (fs::is_directory(file)) file = (fs::path(file) / "mesh.ply").string();
   std::string ext = fs::path(file).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   if (ext == ".tif" || ext == ".tiff") {
-    const Dsm dsm = ReadDsm(file);
+    Dsm dsm = ReadDsm(file);
+    if (filled) FillDsmHoles(&dsm, spec.fill_holes_m);
     return IntoFrame(MeshFromDsm(dsm), dsm.crs_wkt, frame);
   }
   const TriangleMesh mesh = ReadMesh(file);

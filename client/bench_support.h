@@ -17,7 +17,8 @@ TileInput PrepareJobInput(const JobSpec& spec);
 
 // A mesh into `frame`: `path` is a mesh file (mesh.crs, or `default_crs` when the file
 // has none), a directory holding mesh.ply (a refine result), a .tif DSM (triangulated at
-// its full resolution), or "initial" (the job's initial DSM at full resolution).
+// its full resolution), "initial" (the job's initial DSM at full resolution) or
+// "initial-filled" (the same with its holes filled as the refinement fills them).
 TriangleMesh LoadMeshInFrame(const std::string& path, const JobSpec& spec,
                              const std::string& default_crs, const LocalFrame& frame);
 

@@ -37,7 +37,8 @@ int RunZncc(const std::vector<std::string>& argv) {
         "  Mean ZNCC of each surface over the pairs (indices into the job's images, as the job\n"
         "  runner keeps them) at pyramid level L (default 0), with the job's ZNCC options. No\n"
         "  pair-angle filter. MESH: a mesh file (CRS from the file, else the initial DSM's), a\n"
-        "  refine result directory (its mesh.ply), a DSM .tif, or 'initial' (the job's DSM).\n"
+        "  refine result directory (its mesh.ply), a DSM .tif, 'initial' (the job's DSM) or\n"
+        "  'initial-filled' (the job's DSM with its holes filled, as the refinement meshes it).\n"
         "  RPC biases: the job's images[].bias; --estimate-bias adds shifts estimated over the\n"
         "  job's INITIAL surface (as `satmesh bias`; pairs: the refinement's, or --bias-pairs),\n"
         "  so a held-out view is aligned to the initial surface, not to the measured ones.\n");

@@ -147,9 +147,11 @@ JobSpec JobSpecFromJson(const json& job, const std::string& base_dir) {
   }
   if (!job.contains("initial")) Bad("initial", "required");
   Object(job["initial"], "initial");
-  CheckKeys(job["initial"], "initial", {"dsm"});
+  CheckKeys(job["initial"], "initial", {"dsm", "fill_holes_m"});
   if (!job["initial"].contains("dsm")) Bad("initial.dsm", "required");
   spec.initial_dsm = Resolve(String(job["initial"]["dsm"], "initial.dsm"), base_dir);
+  if (job["initial"].contains("fill_holes_m"))
+    spec.fill_holes_m = Number(job["initial"]["fill_holes_m"], "initial.fill_holes_m");
   if (job.contains("outputs")) {
     Object(job["outputs"], "outputs");
     CheckKeys(job["outputs"], "outputs", {"crs"});

@@ -50,6 +50,8 @@ std::string JobSpec::Check() const {
   for (size_t i = 0; i < images.size(); ++i)
     if (images[i].path.empty()) return "images[" + std::to_string(i) + "].href is empty";
   if (initial_dsm.empty()) return "initial.dsm is required";
+  if (!(fill_holes_m >= 0 && fill_holes_m <= 10000))
+    return "initial.fill_holes_m must be in [0, 10000] m, got " + std::to_string(fill_holes_m);
   if (!aoi.polygon.empty() && aoi.polygon.size() < 3)
     return "aoi: a polygon needs >= 3 points, got " + std::to_string(aoi.polygon.size());
   const std::string tiling_problem = tiling.Check();

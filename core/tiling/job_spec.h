@@ -30,6 +30,7 @@ struct TilingOptions {
 struct JobSpec {
   std::vector<JobImage> images;
   std::string initial_dsm;     // GeoTIFF DSM (ellipsoidal heights), projected CRS
+  double fill_holes_m = 50;    // the DSM's holes filled up to this far from data (FillDsmHoles), m; 0: none
   std::string output_crs;      // "" = the initial DSM's CRS
   JobAoi aoi;
   TilingOptions tiling;

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "core/common/error.h"
+#include "core/dsm/fill_holes.h"
 #include "core/geo/crs.h"
 #include "core/image/image_io.h"
 #include "core/rpc/rpc_io.h"
@@ -147,7 +148,11 @@ TileInput PrepareTileInput(const JobSpec& spec, const JobPlan& plan, int tile_in
   SATMESH_CHECK(tile_index >= 0 && tile_index < int(plan.tiles.size()), ErrorCode::kInvalidArgument,
                 "tile index " + std::to_string(tile_index) + " out of range");
   const PlannedTile& t = plan.tiles[tile_index];
-  const Dsm crop = ReadDsmWindow(spec.initial_dsm, t.padded_cells);
+  Dsm crop = ReadDsmWindow(spec.initial_dsm, t.padded_cells);
+  const size_t filled = FillDsmHoles(&crop, spec.fill_holes_m);
+  if (filled > 0)
+    spdlog::info("tile {}: {} empty DSM cells ({:.1f}%) filled", t.Name(), filled,
+                 100.0 * filled / crop.z.size());
   const bool any_valid = std::any_of(crop.z.begin(), crop.z.end(), [](float z) { return std::isfinite(z); });
   SATMESH_CHECK(any_valid, ErrorCode::kInvalidInput,
                 "tile " + t.Name() + ": the initial DSM has no valid cell in it");

@@ -48,6 +48,8 @@ std::vector<Case> Cases(const std::string& job_id) {
       {"POST", exec, With([](json& j) { j["initial"] = "dsm.tif"; }), 400, "initial"},
       {"POST", exec, With([](json& j) { j["initial"].erase("dsm"); }), 400, "initial.dsm"},
       {"POST", exec, With([](json& j) { j["initial"]["dsm"] = 1; }), 400, "initial.dsm"},
+      {"POST", exec, With([](json& j) { j["initial"]["fill_holes_m"] = -1; }), 400, "initial.fill_holes_m"},
+      {"POST", exec, With([](json& j) { j["initial"]["fill_holes_m"] = "far"; }), 400, "initial.fill_holes_m"},
       {"POST", exec, With([](json& j) { j["extra"] = 1; }), 400, "extra"},
       {"POST", exec, With([](json& j) { j["images"][0]["gain"] = 1; }), 400, "images[0].gain"},
       {"POST", exec, With([](json& j) { j["options"] = 3; }), 400, "options"},

@@ -30,6 +30,15 @@ TEST(JobSpecFromJson, JobWithoutTilingIsOneTileOverTheDsm) {
   EXPECT_TRUE(spec.aoi.polygon.empty());
   EXPECT_EQ(spec.tiling.tile_size_m, 0);
   EXPECT_EQ(spec.tiling.workers, 1);
+  EXPECT_EQ(spec.fill_holes_m, 50);
+}
+
+TEST(JobSpecFromJson, ReadsTheHoleFillingDistance) {
+  json job = MinimalJob();
+  job["initial"]["fill_holes_m"] = 0;
+  EXPECT_EQ(proto::JobSpecFromJson(job, "/base").fill_holes_m, 0);
+  job["initial"]["fill_holes_m"] = 1e5;
+  EXPECT_NE(ErrorOf(job).find("initial.fill_holes_m"), std::string::npos) << ErrorOf(job);
 }
 
 TEST(JobSpecFromJson, ReadsAoiAndTiling) {
