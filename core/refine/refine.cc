@@ -23,10 +23,13 @@
 namespace satmesh {
 namespace {
 
-// A level restarts from the initial surface only if its mean ZNCC is higher by more than
-// this: about what meshing the same surface differently changes (a DSM's grid mesh vs its
-// remeshed version: 0.0004-0.0007 on the Pléiades triplet).
-constexpr double kRestartMargin = 0.001;
+// A level keeps the previous level's result only if its mean ZNCC beats the initial
+// surface's by more than this, about what meshing the same surface differently changes (a
+// DSM's grid mesh vs its remeshed version: 0.0004-0.0007 on the Pléiades triplet). Within
+// that, the two explain the images equally well and the initial surface, the user's data
+// at full resolution, is kept (BENCHMARKS.md, session 7: on Pléiades the coarse levels of
+// a narrow pair drift by 0.5 m where they tie with s2p's DSM).
+constexpr double kKeepMargin = 0.001;
 
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
@@ -324,10 +327,10 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
     }
     LevelStats stats;
     bool restarted = false;
-    if (!RefineLevel(ctx, level, initial_zncc - kRestartMargin, &mesh, &stats)) {
-      spdlog::info("level {}: the initial surface's mean ZNCC {:.4f} beats the previous "
-                   "level's {:.4f}; restarting from it",
-                   level, initial_zncc, stats.mean_zncc.front());
+    if (!RefineLevel(ctx, level, initial_zncc + kKeepMargin, &mesh, &stats)) {
+      spdlog::info("level {}: the previous level's mean ZNCC {:.4f} does not beat the "
+                   "initial surface's {:.4f} by {}; restarting from the initial surface",
+                   level, stats.mean_zncc.front(), initial_zncc, kKeepMargin);
       mesh = RemeshForLevel(std::move(initial), options, result.gsd_m, level, progress);
       RefineLevel(ctx, level, std::numeric_limits<double>::quiet_NaN(), &mesh, &stats);
       restarted = true;
