@@ -33,8 +33,9 @@ struct RefineOptions {
   double coarse_edge_px = 2.0;     // edge length of the coarse mesh at level L, in level px, > 0
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
-                                     // surface (remeshed at the level) instead of the previous
-                                     // level's result when its mean ZNCC is higher (refine.cc)
+                                     // surface (remeshed at the level) unless the previous
+                                     // level's result has a mean ZNCC higher by > 0.001
+                                     // (refine.cc, kKeepMargin)
   bool alternate_directions = true;  // iterations other than a level's first and last use
                                      // one direction per pair, alternating (half the work;
                                      // same accuracy on synthetic scenes, BENCHMARKS.md);
