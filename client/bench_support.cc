@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 #include <thread>
+#include <utility>
 
 #include "core/common/error.h"
 #include "core/dsm/dsm.h"
@@ -45,10 +46,8 @@ TriangleMesh IntoFrame(const TriangleMesh& mesh, const std::string& crs, const L
 
 TileInput PrepareJobInput(const JobSpec& spec) {
   Dsm dsm = ReadDsm(spec.initial_dsm);
-  FillDsmHoles(&dsm, spec.fill_holes_m);
-  const double cell = std::abs(dsm.geo_transform[1]);
-  const double coarse_cell = 0.5 * spec.refine.coarse_edge_px * cell * std::ldexp(1.0, spec.refine.levels);
-  return PrepareTileInput(spec, dsm, coarse_cell);
+  const double coarse_cell = CoarseCellSize(spec.refine, std::abs(dsm.geo_transform[1]));
+  return PrepareTileInput(spec, std::move(dsm), coarse_cell);
 }
 
 TriangleMesh LoadMeshInFrame(const std::string& path, const JobSpec& spec,

@@ -3,6 +3,7 @@
 #include <gdal_alg.h>
 #include <gdal_priv.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <opencv2/imgproc.hpp>

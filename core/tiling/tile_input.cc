@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <utility>
 
 #include "core/common/error.h"
 #include "core/dsm/fill_holes.h"
@@ -80,8 +81,9 @@ Dsm DownsampleDsm(const Dsm& dsm, int factor) {
   return out;
 }
 
-TileInput PrepareTileInput(const JobSpec& spec, const Dsm& dsm, double coarse_cell_m) {
+TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
   TileInput tile;
+  tile.filled_dsm_cells = FillDsmHoles(&dsm, spec.fill_holes_m);
   tile.dsm_crs_wkt = dsm.crs_wkt;
   std::vector<float> valid;
   for (float z : dsm.z)
@@ -149,14 +151,16 @@ TileInput PrepareTileInput(const JobSpec& spec, const JobPlan& plan, int tile_in
                 "tile index " + std::to_string(tile_index) + " out of range");
   const PlannedTile& t = plan.tiles[tile_index];
   Dsm crop = ReadDsmWindow(spec.initial_dsm, t.padded_cells);
-  const size_t filled = FillDsmHoles(&crop, spec.fill_holes_m);
-  if (filled > 0)
-    spdlog::info("tile {}: {} empty DSM cells ({:.1f}%) filled", t.Name(), filled,
-                 100.0 * filled / crop.z.size());
   const bool any_valid = std::any_of(crop.z.begin(), crop.z.end(), [](float z) { return std::isfinite(z); });
   SATMESH_CHECK(any_valid, ErrorCode::kInvalidInput,
                 "tile " + t.Name() + ": the initial DSM has no valid cell in it");
-  return PrepareTileInput(spec, crop, CoarseCellSize(spec.refine, plan.dsm.geo_transform[1]));
+  const size_t cells = crop.z.size();
+  TileInput tile =
+      PrepareTileInput(spec, std::move(crop), CoarseCellSize(spec.refine, plan.dsm.geo_transform[1]));
+  if (tile.filled_dsm_cells > 0)
+    spdlog::info("tile {}: {} empty DSM cells ({:.1f}%) filled", t.Name(), tile.filled_dsm_cells,
+                 100.0 * tile.filled_dsm_cells / cells);
+  return tile;
 }
 
 }  // namespace satmesh

@@ -18,6 +18,7 @@ struct TileInput {
   std::vector<std::string> view_names;
   std::vector<std::string> dropped_views;  // images that do not see the tile
   double image_bytes = 0;    // full-resolution image windows held, bytes
+  size_t filled_dsm_cells = 0;  // the DSM's empty cells filled before meshing (FillDsmHoles)
 };
 
 // Downsamples a DSM by an integer factor (NaN-aware block mean; a block with no valid
@@ -28,8 +29,9 @@ Dsm DownsampleDsm(const Dsm& dsm, int factor);
 // remeshes it to its coarse level anyway).
 double CoarseCellSize(const RefineOptions& options, double dsm_cell_m);
 
-// Builds the refinement input over all of `initial_dsm` (its centre is the frame's).
-TileInput PrepareTileInput(const JobSpec& spec, const Dsm& initial_dsm, double coarse_cell_m);
+// Builds the refinement input over all of `initial_dsm` (its centre is the frame's), after
+// filling its holes up to spec.fill_holes_m from data (FillDsmHoles).
+TileInput PrepareTileInput(const JobSpec& spec, Dsm initial_dsm, double coarse_cell_m);
 
 // The same for one planned tile: reads only the DSM cells of the padded tile and only
 // the image windows that see its 3D box (extent x height range +- margin). Throws

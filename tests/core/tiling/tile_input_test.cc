@@ -46,5 +46,22 @@ TEST(TileInput, InitialSurfaceForAnEdgeIsTheDsmAtHalfThatEdge) {
   EXPECT_EQ(coarse.refine.initial_for_edge(0.6).vertices.size(), 100u * 80u);  // never finer
 }
 
+// The DSM's holes are filled before anything is meshed from it; with fill_holes_m = 0
+// they stay open.
+TEST(TileInput, FillsTheDsmHolesBeforeMeshing) {
+  Dsm dsm = TestDsm();
+  for (int j = 30; j < 34; ++j)
+    for (int i = 40; i < 44; ++i) dsm.at(i, j) = std::nanf("");
+  JobSpec spec;
+  spec.initial_dsm = "test.tif";
+  const TileInput filled = PrepareTileInput(spec, dsm, /*coarse_cell_m=*/0.5);
+  EXPECT_EQ(filled.filled_dsm_cells, 16u);
+  EXPECT_EQ(filled.refine.initial_mesh.vertices.size(), 100u * 80u);
+  spec.fill_holes_m = 0;
+  const TileInput open = PrepareTileInput(spec, dsm, /*coarse_cell_m=*/0.5);
+  EXPECT_EQ(open.filled_dsm_cells, 0u);
+  EXPECT_EQ(open.refine.initial_mesh.vertices.size(), 100u * 80u - 16u);
+}
+
 }  // namespace
 }  // namespace satmesh
