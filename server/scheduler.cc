@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/common/error.h"
+#include "core/common/threads.h"
 #include "proto/job_spec_json.h"
 
 namespace satmesh::server {
@@ -225,6 +226,7 @@ void Scheduler::Persist(const std::string& id) {
 }
 
 void Scheduler::WorkerLoop() {
+  ShareProcessorsAmongWorkers(options_.workers);  // the tiles' loops split the cores
   while (true) {
     std::string id;
     size_t tile_index = SIZE_MAX;

@@ -31,6 +31,13 @@ namespace {
 // a narrow pair drift by 0.5 m where they tie with s2p's DSM).
 constexpr double kKeepMargin = 0.001;
 
+// Once a level's result beats the initial surface by more than this, the finer levels
+// no longer measure the initial surface (one photometric pass over a mesh with twice the
+// level's faces, ~9% of a large tile's time): the chain's lead grows from level to level
+// (synthetic scenes: 0.019-0.026 at level 1, 0.037-0.071 at level 0; BENCHMARKS.md,
+// session 8), while a DSM as sharp as the images ties with it (Pléiades: < 0.001).
+constexpr double kSkipCheckMargin = 0.01;
+
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
@@ -309,6 +316,7 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
   TriangleMesh mesh =
       RemeshForLevel(input.initial_mesh, options, result.gsd_m, options.levels, progress);
   const LevelContext ctx{input, options, progress, sources, result.pairs, result.gsd_m};
+  bool check_initial = options.restart_from_initial;
   for (int level = options.levels; level >= 0; --level) {
     const auto level_start = Clock::now();
     double initial_zncc = std::numeric_limits<double>::quiet_NaN(), check_s = 0;
@@ -316,7 +324,7 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
     if (level < options.levels) {
       mesh = Subdivide1To4(mesh);
       SortSpatially(&mesh);
-      if (options.restart_from_initial) {
+      if (check_initial) {
         const auto t0 = Clock::now();
         initial = InitialSurfaceAt(input, options, result.gsd_m, level);
         initial_zncc = LevelZncc(input, sources, result.pairs, options,
@@ -335,9 +343,11 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
       RefineLevel(ctx, level, std::numeric_limits<double>::quiet_NaN(), &mesh, &stats);
       restarted = true;
     } else if (!std::isnan(initial_zncc)) {
+      check_initial = stats.mean_zncc.front() <= initial_zncc + kSkipCheckMargin;
       spdlog::info("level {}: kept the previous level's result (initial surface: mean ZNCC "
-                   "{:.4f}, {:.1f} s to measure)",
-                   level, initial_zncc, check_s);
+                   "{:.4f}, {:.1f} s to measure){}",
+                   level, initial_zncc, check_s,
+                   check_initial ? "" : "; finer levels do not measure it again");
     }
     stats.initial_zncc = initial_zncc;
     stats.restarted = restarted;

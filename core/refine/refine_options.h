@@ -35,7 +35,9 @@ struct RefineOptions {
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous
                                      // level's result has a mean ZNCC higher by > 0.001
-                                     // (refine.cc, kKeepMargin)
+                                     // (refine.cc, kKeepMargin); once it is higher by
+                                     // > 0.01, finer levels skip the comparison
+                                     // (kSkipCheckMargin)
   bool alternate_directions = true;  // iterations other than a level's first and last use
                                      // one direction per pair, alternating (half the work;
                                      // same accuracy on synthetic scenes, BENCHMARKS.md);

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "core/common/error.h"
+#include "core/common/threads.h"
 
 namespace satmesh {
 namespace {
@@ -77,6 +78,7 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
   std::atomic<size_t> next{0};
   std::atomic<bool> cancelled{false};
   auto worker = [&] {
+    if (out.workers > 1) ShareProcessorsAmongWorkers(out.workers);
     for (size_t i = next++; i < n && !cancelled; i = next++) {
       const std::string name = out.plan.tiles[i].Name();
       try {
@@ -89,10 +91,13 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
     }
   };
   const auto t_tiles = Clock::now();
-  std::vector<std::thread> threads;
-  for (int w = 1; w < out.workers; ++w) threads.emplace_back(worker);
-  worker();
-  for (auto& t : threads) t.join();
+  if (out.workers == 1) {
+    worker();
+  } else {  // each worker on a thread of its own, so this thread's OpenMP setting stays
+    std::vector<std::thread> threads;
+    for (int w = 0; w < out.workers; ++w) threads.emplace_back(worker);
+    for (auto& t : threads) t.join();
+  }
   out.tiles_s = Seconds(t_tiles);
   if (cancelled || progress.Cancelled()) ThrowError(ErrorCode::kCancelled, "cancelled by the caller");
 

@@ -104,6 +104,28 @@ TEST(Refine, RestartsFromTheInitialSurfaceWhenItExplainsTheImagesBetter) {
   EXPECT_GT(PlaneError(chained.mesh, plane, 30).first, 0.5);  // still metres off
 }
 
+// Once the chain beats the initial surface clearly (here: the chain starts exact, the
+// surface for the finer levels is 3 m off), the finer levels stop measuring it.
+TEST(Refine, StopsMeasuringTheInitialSurfaceOnceTheChainWinsClearly) {
+  const testing::Plane plane;
+  auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                       testing::PlaneMesh(plane, 40, 1.0, 0.0));
+  input.initial_for_edge = [&plane](double edge_m) {
+    return testing::PlaneMesh(plane, 40, 0.5 * edge_m, 3.0);
+  };
+  RefineOptions o = SmallOptions();
+  o.iterations_per_level = 1;
+  const RefineResult result = Refine(input, o);
+  ASSERT_EQ(result.levels.size(), 3u);
+  EXPECT_FALSE(std::isnan(result.levels[1].initial_zncc));  // measured once
+  EXPECT_GT(result.levels[1].mean_zncc.front(), result.levels[1].initial_zncc + 0.01);
+  EXPECT_FALSE(result.levels[1].restarted);
+  EXPECT_TRUE(std::isnan(result.levels[2].initial_zncc));  // not again
+  EXPECT_EQ(result.levels[2].initial_check_s, 0.0);
+  EXPECT_FALSE(result.levels[2].restarted);
+  EXPECT_LT(PlaneError(result.mesh, plane, 30).first, 0.05);  // 0.1 GSD: the chain kept
+}
+
 // The default rasterized hit maps and Embree's ray casting give the same refinement.
 TEST(Refine, RasterizedAndRayCastHitMapsAgree) {
   const testing::Plane plane;
