@@ -1,6 +1,7 @@
 #include "core/refine/refine.h"
 
 #include <Eigen/LU>
+#include <omp.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -69,6 +70,13 @@ struct LevelContext {
   double gsd_m;
 };
 
+// One thread's buffers of the photometric pass, kept across iterations: they are tens
+// of MB a thread at level 0, and fresh ones cost page faults and zeroing every pass.
+struct PassScratch {
+  GradientAccumulator accumulator;
+  PairWorkspace workspace;
+};
+
 // Mean ZNCC over all pair-directions; fills the gradient and per-vertex pair counts.
 // Pair-directions run in parallel (one per thread, gathered per face by each thread's
 // accumulator, scattered to the vertices once at the end). The views' hit maps, with
@@ -76,8 +84,9 @@ struct LevelContext {
 double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& slot,
                        const std::vector<std::pair<int, int>>& pairs, const TriangleMesh& mesh,
                        const std::vector<Eigen::Vector3f>& normals,
-                       const PhotometricOptions& options, std::vector<Eigen::Vector3d>* gradient,
-                       std::vector<int>* seen, int one_direction = -1) {
+                       const PhotometricOptions& options, std::vector<PassScratch>* scratch,
+                       std::vector<Eigen::Vector3d>* gradient, std::vector<int>* seen,
+                       int one_direction = -1) {
   // one_direction >= 0: pair k only as (i, j) if (one_direction + k) is even, else (j, i).
   std::vector<std::pair<int, int>> directions;
   for (size_t k = 0; k < pairs.size(); ++k) {
@@ -89,11 +98,13 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
   const bool accumulate = gradient || seen;
   double sum = 0;
   long count = 0;
+  if (scratch->size() < size_t(omp_get_max_threads())) scratch->resize(omp_get_max_threads());
 #pragma omp parallel
   {
-    GradientAccumulator accumulator;
+    PassScratch& own = (*scratch)[omp_get_thread_num()];
+    GradientAccumulator& accumulator = own.accumulator;
     if (accumulate) accumulator.Reset(mesh);
-    PairWorkspace workspace;
+    PairWorkspace& workspace = own.workspace;
 #pragma omp for schedule(dynamic, 1) reduction(+ : sum, count)
     for (size_t d = 0; d < directions.size(); ++d) {
       const auto [a, b] = directions[d];
@@ -157,8 +168,9 @@ double LevelZncc(const RefineInput& input, const std::vector<ViewSource>& source
     const RayScene scene(mesh);
     for (auto& v : views) CastHitMap(scene, &v, &normals);
   }
+  std::vector<PassScratch> scratch;
   return PhotometricPass(views, slot, pairs, mesh, normals,
-                         PhotometricOptionsAt(options, level_gsd_m), nullptr, nullptr);
+                         PhotometricOptionsAt(options, level_gsd_m), &scratch, nullptr, nullptr);
 }
 
 // The iterations of one level. Returns false, before changing the mesh, if the mean ZNCC
@@ -181,6 +193,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   std::optional<RayScene> scene;  // Embree, unless the hit maps are rasterized
   if (!opt.rasterize_hit_maps) scene.emplace(*mesh);
   std::vector<RasterWorkspace> raster;
+  std::vector<PassScratch> scratch;
   const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
   const size_t nv = mesh->vertices.size();
   stats.num_vertices = int(nv);
@@ -207,7 +220,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     std::fill(seen.begin(), seen.end(), 0);
     // Iterations between the first and the last take one direction per pair, alternating.
     const bool half = opt.alternate_directions && it > 0 && !last;
-    const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, normals, photo,
+    const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, normals, photo, &scratch,
                                         last ? nullptr : &gradient, last ? nullptr : &seen,
                                         half ? it % 2 : -1);
     stats.mean_zncc.push_back(zncc);
