@@ -69,6 +69,7 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "min_ray_cos") r->min_ray_cos = Number(v, path);
     else if (key == "virtual_camera_grid_px") r->virtual_camera_grid_px = Integer(v, path);
     else if (key == "rasterize_hit_maps") r->rasterize_hit_maps = Boolean(v, path);
+    else if (key == "hit_maps_every") r->hit_maps_every = Integer(v, path);
     else if (key == "coarse_edge_px") r->coarse_edge_px = Number(v, path);
     else if (key == "remesh_coarse") r->remesh_coarse = Boolean(v, path);
     else if (key == "alternate_directions") r->alternate_directions = Boolean(v, path);

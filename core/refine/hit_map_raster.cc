@@ -260,17 +260,63 @@ void ProjectVertices(const TriangleMesh& mesh, const ViewLevel& view, const Eige
   }
 }
 
-}  // namespace
+// Per face, what the hit-point pass reads: the pass visits pixels in image order, so
+// the faces come at random, and one 48-byte record a face is one miss where the face's
+// vertex indices, its three vertices and its normal were five (session 8).
+struct FaceRecord {
+  Eigen::Vector3f p0, e1, e2;  // hit point = p0 + u e1 + v e2
+  Eigen::Vector3f normal;      // zero without face normals
+};
 
-void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace,
-                     const std::vector<Eigen::Vector3f>* face_normals) {
+std::vector<FaceRecord> FaceRecords(const TriangleMesh& mesh,
+                                    const std::vector<Eigen::Vector3f>* face_normals) {
+  std::vector<FaceRecord> records(mesh.faces.size());
+#pragma omp parallel for schedule(static)
+  for (long f = 0; f < long(records.size()); ++f) {
+    const Eigen::Vector3i& face = mesh.faces[f];
+    const Eigen::Vector3f& p0 = mesh.vertices[face[0]];
+    records[f] = FaceRecord{p0, mesh.vertices[face[1]] - p0, mesh.vertices[face[2]] - p0,
+                            face_normals ? (*face_normals)[f] : Eigen::Vector3f::Zero()};
+  }
+  return records;
+}
+
+// Every pixel's hit point on its face (at its barycentrics), its parameter along the
+// pixel's ray (unit direction from the plane z = z_high) and its ray cosine; pixels for
+// which is_miss(p) holds become misses first.
+template <class IsMiss>
+void FillHitPoints(const std::vector<FaceRecord>& records, bool with_ray_cos, ViewLevel* view,
+                   IsMiss is_miss) {
+  HitMap& map = view->hit_map;
+  const float z_high = float(view->camera.z_high());
+  if (with_ray_cos) map.ray_cos.resize(map.hits.size());
+#pragma omp parallel for schedule(static)
+  for (long p = 0; p < long(map.hits.size()); ++p) {
+    RayHit& hit = map.hits[p];
+    if (is_miss(p)) hit = RayHit{};
+    map.surface[p].face = hit.face;
+    if (!hit.hit()) {
+      if (with_ray_cos) map.ray_cos[p] = 0.f;
+      continue;
+    }
+    const FaceRecord& face = records[hit.face];
+    const Eigen::Vector3f& direction = view->ray_directions[p];
+    if (with_ray_cos) map.ray_cos[p] = direction.dot(face.normal);  // RayCosine
+    const Eigen::Vector3f X = face.p0 + hit.u * face.e1 + hit.v * face.e2;
+    hit.t = (X.z() - z_high) / direction.z();
+    map.surface[p].point = X;
+  }
+}
+
+void RasterizeHitMapWith(const TriangleMesh& mesh, const std::vector<FaceRecord>& records,
+                         bool with_ray_cos, ViewLevel* view, RasterWorkspace* workspace) {
   RasterWorkspace& ws = *workspace;
   HitMap& map = view->hit_map;
   const int w = view->width(), h = view->height();
   const size_t n = size_t(w) * h;
   map.hits.resize(n);  // written where a face is drawn; the pass below marks the rest
   map.surface.resize(n);
-  if (face_normals) map.ray_cos.resize(n);
+  if (with_ray_cos) map.ray_cos.resize(n);
   ws.depth.assign(n, std::numeric_limits<float>::infinity());
   ProjectVertices(mesh, *view, MeanRayDirection(*view), &ws);
 #pragma omp parallel
@@ -281,37 +327,41 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
     RasterizeBand(mesh, ws.vertices.data(),
                   BandTarget{w, row_begin, row_end, map.hits.data(), ws.depth.data()});
   }
-  // The hit point on the face, its parameter along the pixel's ray (unit direction from
-  // the plane z = z_high), and the ray cosine. Pixels no face was drawn into (depth still
-  // infinite) become misses here, instead of every pixel being cleared before drawing
-  // (one pass less over the 16-byte hits: BENCHMARKS.md, session 8).
-  const float z_high = float(view->camera.z_high());
+  // Pixels no face was drawn into (depth still infinite) become misses here, instead of
+  // every pixel being cleared before drawing (one pass less over the 16-byte hits).
   const float* depth = ws.depth.data();
-#pragma omp parallel for schedule(static)
-  for (long p = 0; p < long(n); ++p) {
-    RayHit& hit = map.hits[p];
-    if (!(depth[p] < std::numeric_limits<float>::infinity())) hit = RayHit{};
-    map.surface[p].face = hit.face;
-    if (face_normals) map.ray_cos[p] = RayCosine(view->ray_directions[p], hit.face, *face_normals);
-    if (!hit.hit()) continue;
-    const Eigen::Vector3i& f = mesh.faces[hit.face];
-    const Eigen::Vector3f& p0 = mesh.vertices[f[0]];
-    const Eigen::Vector3f X =
-        p0 + hit.u * (mesh.vertices[f[1]] - p0) + hit.v * (mesh.vertices[f[2]] - p0);
-    const Eigen::Vector3f& direction = view->ray_directions[p];
-    hit.t = (X.z() - z_high) / direction.z();
-    map.surface[p].point = X;
-  }
+  FillHitPoints(records, with_ray_cos, view, [depth](size_t p) {
+    return !(depth[p] < std::numeric_limits<float>::infinity());
+  });
+}
+
+}  // namespace
+
+void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace,
+                     const std::vector<Eigen::Vector3f>* face_normals) {
+  RasterizeHitMapWith(mesh, FaceRecords(mesh, face_normals), face_normals != nullptr, view,
+                      workspace);
 }
 
 void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
                       std::vector<RasterWorkspace>* workspaces,
                       const std::vector<Eigen::Vector3f>* face_normals) {
   workspaces->resize(omp_get_max_threads());
-  // Inside, RasterizeHitMap's own parallel regions run on the calling thread alone.
+  const std::vector<FaceRecord> records = FaceRecords(mesh, face_normals);  // shared by all
+  // Inside, RasterizeHitMapWith's own parallel regions run on the calling thread alone.
 #pragma omp parallel for schedule(dynamic, 1)
   for (size_t v = 0; v < views->size(); ++v)
-    RasterizeHitMap(mesh, &(*views)[v], &(*workspaces)[omp_get_thread_num()], face_normals);
+    RasterizeHitMapWith(mesh, records, face_normals != nullptr, &(*views)[v],
+                        &(*workspaces)[omp_get_thread_num()]);
+}
+
+void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
+                   const std::vector<Eigen::Vector3f>* face_normals) {
+  const std::vector<FaceRecord> records = FaceRecords(mesh, face_normals);
+  // One view per thread, as RasterizeHitMaps; FillHitPoints's loop runs on it alone.
+#pragma omp parallel for schedule(dynamic, 1)
+  for (size_t v = 0; v < views->size(); ++v)
+    FillHitPoints(records, face_normals != nullptr, &(*views)[v], [](size_t) { return false; });
 }
 
 }  // namespace satmesh

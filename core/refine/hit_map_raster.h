@@ -40,4 +40,12 @@ void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
                       std::vector<RasterWorkspace>* workspaces,
                       const std::vector<Eigen::Vector3f>* face_normals = nullptr);
 
+// Between two rasterizations (or ray castings): each pixel keeps its face and barycentric
+// coordinates, and its hit point, ray parameter and ray cosine (when face_normals is not
+// null) follow the mesh's moved vertices. A vertex moves by at most max_step_gsd (0.5
+// level pixels) an iteration, typically a tenth of that, so a pixel's point leaves its ray
+// by a fraction of that move (RefineOptions::hit_maps_every; BENCHMARKS.md, session 8).
+void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
+                   const std::vector<Eigen::Vector3f>* face_normals);
+
 }  // namespace satmesh

@@ -206,7 +206,9 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const bool last = it == opt.iterations_per_level;
     auto t0 = Clock::now();
     const auto normals = FaceNormals(*mesh);
-    if (opt.rasterize_hit_maps) {
+    if (it > 0 && !last && it % opt.hit_maps_every != 0) {
+      FollowHitMaps(*mesh, &views, &normals);  // faces kept, points moved with them
+    } else if (opt.rasterize_hit_maps) {
       RasterizeHitMaps(*mesh, &views, &raster, &normals);
     } else {
       for (auto& v : views) {

@@ -37,6 +37,8 @@ std::string RefineOptions::Check() const {
     return "min_ray_cos must be in [0, 1), got " + Num(min_ray_cos);
   if (virtual_camera_grid_px < 1)
     return "virtual_camera_grid_px must be >= 1, got " + Num(virtual_camera_grid_px);
+  if (hit_maps_every < 1 || hit_maps_every > 20)
+    return "hit_maps_every must be in [1, 20], got " + Num(hit_maps_every);
   if (!(coarse_edge_px > 0)) return "coarse_edge_px must be > 0, got " + Num(coarse_edge_px);
   return pairs.Check();
 }

@@ -30,6 +30,9 @@ struct RefineOptions {
   int virtual_camera_grid_px = 16; // spacing of exactly localised rays, in level pixels, >= 1
   bool rasterize_hit_maps = true;  // hit maps by z-buffer rasterization through the RFM
                                    // (hit_map_raster.h); false: Embree ray casting
+  int hit_maps_every = 2;          // hit maps made anew every N iterations and at a level's
+                                   // first and last; in between each pixel keeps its face
+                                   // and its point follows the face (FollowHitMaps), [1, 20]
   double coarse_edge_px = 2.0;     // edge length of the coarse mesh at level L, in level px, > 0
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "core/image/image.h"
+#include "core/mesh/topology.h"
 #include "tests/core/refine/plane_scene.h"
 
 namespace satmesh {
@@ -148,6 +149,67 @@ TEST(RasterizeHitMap, SkipsFacesWithNonFiniteVertices) {
   EXPECT_GT(clean_hits, 5000);
   EXPECT_LT(broken_hits, clean_hits);             // the NaN vertices' faces are gone
   EXPECT_GT(broken_hits, 0.9 * clean_hits);       // and nothing else
+}
+
+// Between rasterizations a pixel keeps its face; its point moves with the face. Moved by
+// a typical iteration's step (here up to 0.05 m = 0.1 GSD, in z and sideways), the
+// followed points stay within a fraction of the move of a fresh rasterization's, nearly
+// all on the same face; unmoved, they are the rasterization's exactly.
+TEST(FollowHitMaps, PointsMoveWithTheirFacesCloseToAFreshRasterization) {
+  const TriangleMesh mesh = BlockMesh(1.0);
+  const RefineInput input = testing::MakePlaneInput(testing::Plane{}, {{25, 40}}, mesh, 120, 0.5);
+  auto make_views = [&] {
+    std::vector<ViewLevel> views;
+    views.push_back(MakeViewLevel(0, 0, NormalizeRadiometry(input.views[0].image),
+                                  input.views[0].rpc, input.frame, Eigen::Vector3d(-30, -30, -15),
+                                  Eigen::Vector3d(30, 30, 20), 8));
+    return views;
+  };
+  std::vector<RasterWorkspace> workspaces;
+  std::vector<ViewLevel> followed = make_views(), fresh = make_views();
+  const auto normals = FaceNormals(mesh);
+  RasterizeHitMaps(mesh, &followed, &workspaces, &normals);
+  RasterizeHitMaps(mesh, &fresh, &workspaces, &normals);
+  FollowHitMaps(mesh, &followed, &normals);  // nothing moved: the same hit map
+  const HitMap &a = followed[0].hit_map, &b = fresh[0].hit_map;
+  for (size_t p = 0; p < a.hits.size(); ++p) {
+    ASSERT_EQ(a.surface[p].face, b.surface[p].face);
+    if (a.surface[p].face < 0) continue;
+    ASSERT_EQ(a.surface[p].point, b.surface[p].point);
+    ASSERT_EQ(a.ray_cos[p], b.ray_cos[p]);
+    ASSERT_EQ(a.hits[p].t, b.hits[p].t);
+  }
+
+  TriangleMesh moved = mesh;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> step(-0.03f, 0.03f);
+  for (auto& v : moved.vertices) v += Eigen::Vector3f(step(rng), step(rng), 0.02f + step(rng));
+  const auto moved_normals = FaceNormals(moved);
+  FollowHitMaps(moved, &followed, &moved_normals);
+  RasterizeHitMaps(moved, &fresh, &workspaces, &moved_normals);
+  long both = 0, same_face = 0, close = 0, cos_close = 0;
+  std::vector<float> distance;
+  for (size_t p = 0; p < a.hits.size(); ++p) {
+    if (a.surface[p].face < 0 || b.surface[p].face < 0) continue;
+    ++both;
+    same_face += a.surface[p].face == b.surface[p].face;
+    distance.push_back((a.surface[p].point - b.surface[p].point).norm());
+    close += distance.back() < 0.06f;  // the largest vertex move
+    cos_close += std::abs(a.ray_cos[p] - b.ray_cos[p]) < 0.02f;
+    EXPECT_NEAR(a.ray_cos[p], followed[0].ray_directions[p].dot(moved_normals[a.surface[p].face]),
+                1e-6f);
+  }
+  std::sort(distance.begin(), distance.end());
+  const float median = distance[distance.size() / 2];
+  std::printf("followed vs fresh: same face %.4f, point distance median %.4f m, p98 %.4f m, "
+              "within 6 cm %.4f, ray cosines within 0.02 %.4f of %ld\n",
+              double(same_face) / both, median, distance[distance.size() * 98 / 100],
+              double(close) / both, double(cos_close) / both, both);
+  ASSERT_GT(both, 5000);
+  EXPECT_GT(double(same_face) / both, 0.9);
+  EXPECT_GT(double(close) / both, 0.98);
+  EXPECT_LT(median, 0.025f);  // below half the largest move
+  EXPECT_GT(double(cos_close) / both, 0.95);
 }
 
 }  // namespace

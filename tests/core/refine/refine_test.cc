@@ -45,6 +45,9 @@ TEST(RefineOptions, InvalidValuesAreNamed) {
   o = RefineOptions();
   o.step = -1;
   EXPECT_NE(o.Check().find("step"), std::string::npos);
+  o = RefineOptions();
+  o.hit_maps_every = 0;
+  EXPECT_NE(o.Check().find("hit_maps_every"), std::string::npos);
 }
 
 TEST(Refine, GroundTruthStaysPut) {
