@@ -125,7 +125,7 @@ RaycastTiming TimeRaycast(const RefineInput& input, const TriangleMesh& mesh,
   // The rasterized hit maps of the same views, and how often they agree with Embree's.
   std::vector<std::vector<RayHit>> embree_hits;
   for (const auto& v : levels) embree_hits.push_back(v.hit_map.hits);
-  std::vector<RasterWorkspace> raster;
+  HitMapScratch raster;
   timing.raster_s = 1e300;
   for (int r = 0; r < std::max(1, repeats); ++r) {
     t0 = Clock::now();

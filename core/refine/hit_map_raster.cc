@@ -260,25 +260,17 @@ void ProjectVertices(const TriangleMesh& mesh, const ViewLevel& view, const Eige
   }
 }
 
-// Per face, what the hit-point pass reads: the pass visits pixels in image order, so
-// the faces come at random, and one 48-byte record a face is one miss where the face's
-// vertex indices, its three vertices and its normal were five (session 8).
-struct FaceRecord {
-  Eigen::Vector3f p0, e1, e2;  // hit point = p0 + u e1 + v e2
-  Eigen::Vector3f normal;      // zero without face normals
-};
-
-std::vector<FaceRecord> FaceRecords(const TriangleMesh& mesh,
-                                    const std::vector<Eigen::Vector3f>* face_normals) {
-  std::vector<FaceRecord> records(mesh.faces.size());
+// records->at(f): face f's first vertex, edges and normal (zero without normals).
+void FillFaceRecords(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>* face_normals,
+                     std::vector<FaceRecord>* records) {
+  records->resize(mesh.faces.size());
 #pragma omp parallel for schedule(static)
-  for (long f = 0; f < long(records.size()); ++f) {
+  for (long f = 0; f < long(records->size()); ++f) {
     const Eigen::Vector3i& face = mesh.faces[f];
     const Eigen::Vector3f& p0 = mesh.vertices[face[0]];
-    records[f] = FaceRecord{p0, mesh.vertices[face[1]] - p0, mesh.vertices[face[2]] - p0,
-                            face_normals ? (*face_normals)[f] : Eigen::Vector3f::Zero()};
+    (*records)[f] = FaceRecord{p0, mesh.vertices[face[1]] - p0, mesh.vertices[face[2]] - p0,
+                               face_normals ? (*face_normals)[f] : Eigen::Vector3f::Zero()};
   }
-  return records;
 }
 
 // Every pixel's hit point on its face (at its barycentrics), its parameter along the
@@ -339,29 +331,30 @@ void RasterizeHitMapWith(const TriangleMesh& mesh, const std::vector<FaceRecord>
 
 void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace,
                      const std::vector<Eigen::Vector3f>* face_normals) {
-  RasterizeHitMapWith(mesh, FaceRecords(mesh, face_normals), face_normals != nullptr, view,
-                      workspace);
+  std::vector<FaceRecord> records;
+  FillFaceRecords(mesh, face_normals, &records);
+  RasterizeHitMapWith(mesh, records, face_normals != nullptr, view, workspace);
 }
 
 void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
-                      std::vector<RasterWorkspace>* workspaces,
-                      const std::vector<Eigen::Vector3f>* face_normals) {
-  workspaces->resize(omp_get_max_threads());
-  const std::vector<FaceRecord> records = FaceRecords(mesh, face_normals);  // shared by all
+                      HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals) {
+  scratch->threads.resize(omp_get_max_threads());
+  FillFaceRecords(mesh, face_normals, &scratch->faces);  // shared by all views
   // Inside, RasterizeHitMapWith's own parallel regions run on the calling thread alone.
 #pragma omp parallel for schedule(dynamic, 1)
   for (size_t v = 0; v < views->size(); ++v)
-    RasterizeHitMapWith(mesh, records, face_normals != nullptr, &(*views)[v],
-                        &(*workspaces)[omp_get_thread_num()]);
+    RasterizeHitMapWith(mesh, scratch->faces, face_normals != nullptr, &(*views)[v],
+                        &scratch->threads[omp_get_thread_num()]);
 }
 
 void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
-                   const std::vector<Eigen::Vector3f>* face_normals) {
-  const std::vector<FaceRecord> records = FaceRecords(mesh, face_normals);
+                   HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals) {
+  FillFaceRecords(mesh, face_normals, &scratch->faces);
   // One view per thread, as RasterizeHitMaps; FillHitPoints's loop runs on it alone.
 #pragma omp parallel for schedule(dynamic, 1)
   for (size_t v = 0; v < views->size(); ++v)
-    FillHitPoints(records, face_normals != nullptr, &(*views)[v], [](size_t) { return false; });
+    FillHitPoints(scratch->faces, face_normals != nullptr, &(*views)[v],
+                  [](size_t) { return false; });
 }
 
 }  // namespace satmesh

@@ -28,6 +28,20 @@ struct RasterWorkspace {
   std::vector<float> depth;            // z-buffer, per pixel
 };
 
+// Per face, what the hit-point pass reads, in one record: the pass visits pixels in
+// image order, so it reads faces at random (one record instead of the face's vertex
+// indices, three vertices and normal from four arrays).
+struct FaceRecord {
+  Eigen::Vector3f p0, e1, e2;  // hit point = p0 + u e1 + v e2
+  Eigen::Vector3f normal;      // zero without face normals
+};
+
+// Scratch of RasterizeHitMaps and FollowHitMaps, reused across iterations.
+struct HitMapScratch {
+  std::vector<RasterWorkspace> threads;  // one per thread
+  std::vector<FaceRecord> faces;         // per mesh face
+};
+
 // Fills view->hit_map (hits, surface) for the mesh's current vertices, like
 // CastHitMap, and ray_cos too when face_normals is not null. Parallel over
 // row bands with OpenMP.
@@ -35,9 +49,9 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
                      const std::vector<Eigen::Vector3f>* face_normals = nullptr);
 
 // The hit maps of all views, one view per thread (a view alone does not keep two
-// threads busy: every band must scan every face). workspaces: one per thread, resized.
+// threads busy: every band must scan every face).
 void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
-                      std::vector<RasterWorkspace>* workspaces,
+                      HitMapScratch* scratch,
                       const std::vector<Eigen::Vector3f>* face_normals = nullptr);
 
 // Between two rasterizations (or ray castings): each pixel keeps its face and barycentric
@@ -46,6 +60,6 @@ void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
 // level pixels) an iteration, typically a tenth of that, so a pixel's point leaves its ray
 // by a fraction of that move (RefineOptions::hit_maps_every; BENCHMARKS.md, session 8).
 void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
-                   const std::vector<Eigen::Vector3f>* face_normals);
+                   HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals);
 
 }  // namespace satmesh

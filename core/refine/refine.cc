@@ -162,7 +162,7 @@ double LevelZncc(const RefineInput& input, const std::vector<ViewSource>& source
       MakeViewLevels(input, sources, pairs, mesh, level, options.virtual_camera_grid_px, &slot);
   const auto normals = FaceNormals(mesh);
   if (rasterize) {
-    std::vector<RasterWorkspace> raster;
+    HitMapScratch raster;
     RasterizeHitMaps(mesh, &views, &raster, &normals);
   } else {
     const RayScene scene(mesh);
@@ -192,7 +192,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
 
   std::optional<RayScene> scene;  // Embree, unless the hit maps are rasterized
   if (!opt.rasterize_hit_maps) scene.emplace(*mesh);
-  std::vector<RasterWorkspace> raster;
+  HitMapScratch raster;
   std::vector<PassScratch> scratch;
   const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
   const size_t nv = mesh->vertices.size();
@@ -207,7 +207,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     auto t0 = Clock::now();
     const auto normals = FaceNormals(*mesh);
     if (it > 0 && !last && it % opt.hit_maps_every != 0) {
-      FollowHitMaps(*mesh, &views, &normals);  // faces kept, points moved with them
+      FollowHitMaps(*mesh, &views, &raster, &normals);  // faces kept, points moved with them
     } else if (opt.rasterize_hit_maps) {
       RasterizeHitMaps(*mesh, &views, &raster, &normals);
     } else {

@@ -235,8 +235,8 @@ BENCHMARK(BM_RasterizeHitMap)->Unit(benchmark::kMillisecond)->UseRealTime()->Mea
 void BM_RasterizeHitMaps4Views(benchmark::State& state) {  // one view per thread
   std::vector<ViewLevel> views;
   for (int v = 0; v < 4; ++v) views.push_back(MakeView(v, 15 + 5 * v, 30 + 60 * v));
-  std::vector<RasterWorkspace> workspaces;
-  for (auto _ : state) RasterizeHitMaps(CityMesh(), &views, &workspaces);
+  HitMapScratch scratch;
+  for (auto _ : state) RasterizeHitMaps(CityMesh(), &views, &scratch);
   state.SetItemsProcessed(state.iterations() * 4 * views[0].ray_directions.size());
 }
 BENCHMARK(BM_RasterizeHitMaps4Views)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();

@@ -165,12 +165,12 @@ TEST(FollowHitMaps, PointsMoveWithTheirFacesCloseToAFreshRasterization) {
                                   Eigen::Vector3d(30, 30, 20), 8));
     return views;
   };
-  std::vector<RasterWorkspace> workspaces;
+  HitMapScratch scratch;
   std::vector<ViewLevel> followed = make_views(), fresh = make_views();
   const auto normals = FaceNormals(mesh);
-  RasterizeHitMaps(mesh, &followed, &workspaces, &normals);
-  RasterizeHitMaps(mesh, &fresh, &workspaces, &normals);
-  FollowHitMaps(mesh, &followed, &normals);  // nothing moved: the same hit map
+  RasterizeHitMaps(mesh, &followed, &scratch, &normals);
+  RasterizeHitMaps(mesh, &fresh, &scratch, &normals);
+  FollowHitMaps(mesh, &followed, &scratch, &normals);  // nothing moved: the same hit map
   const HitMap &a = followed[0].hit_map, &b = fresh[0].hit_map;
   for (size_t p = 0; p < a.hits.size(); ++p) {
     ASSERT_EQ(a.surface[p].face, b.surface[p].face);
@@ -185,8 +185,8 @@ TEST(FollowHitMaps, PointsMoveWithTheirFacesCloseToAFreshRasterization) {
   std::uniform_real_distribution<float> step(-0.03f, 0.03f);
   for (auto& v : moved.vertices) v += Eigen::Vector3f(step(rng), step(rng), 0.02f + step(rng));
   const auto moved_normals = FaceNormals(moved);
-  FollowHitMaps(moved, &followed, &moved_normals);
-  RasterizeHitMaps(moved, &fresh, &workspaces, &moved_normals);
+  FollowHitMaps(moved, &followed, &scratch, &moved_normals);
+  RasterizeHitMaps(moved, &fresh, &scratch, &moved_normals);
   long both = 0, same_face = 0, close = 0, cos_close = 0;
   std::vector<float> distance;
   for (size_t p = 0; p < a.hits.size(); ++p) {
