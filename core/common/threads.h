@@ -6,8 +6,9 @@ namespace satmesh {
 
 // Shares the machine's processors among `workers` concurrent workers: the OpenMP loops
 // that the calling thread starts from now on use max(1, processors / workers) threads
-// (a per-thread setting; other threads are unaffected). Returns that number. With one
-// tile per core, no loop waits at a barrier for the other core (BENCHMARKS.md, session 8).
+// (a per-thread setting; other threads are unaffected). Returns that number. Without it
+// each of N workers starts a team on every processor: N times as many busy threads as
+// processors, spinning at each other's barriers (BENCHMARKS.md, session 8).
 int ShareProcessorsAmongWorkers(int workers);
 
 }  // namespace satmesh
