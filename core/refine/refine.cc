@@ -34,9 +34,10 @@ constexpr double kKeepMargin = 0.001;
 
 // Once a level's result beats the initial surface by more than this, the finer levels
 // no longer measure the initial surface (one photometric pass over a mesh with twice the
-// level's faces, ~9% of a large tile's time): the chain's lead grows from level to level
-// (synthetic scenes: 0.019-0.026 at level 1, 0.037-0.071 at level 0; BENCHMARKS.md,
-// session 8), while a DSM as sharp as the images ties with it (Pléiades: < 0.001).
+// level's faces, ~9% of a large tile's time): a chain that wins clearly keeps winning at
+// the finer levels (synthetic scenes: 0.019-0.026 at level 1, then 0.037-0.071 at level
+// 0; large with levels 3: 0.013, 0.008, 0.009; BENCHMARKS.md, session 8), while a DSM as
+// sharp as the images ties with it (Pléiades: < 0.001).
 constexpr double kSkipCheckMargin = 0.01;
 
 using Clock = std::chrono::steady_clock;

@@ -33,6 +33,18 @@ RefineOptions SmallOptions() {
   return o;
 }
 
+// The plane scene started `coarse_off_m` above the plane, whose initial surface for the
+// finer levels (initial_for_edge, meshed at half their edge) is `finer_off_m` above it.
+RefineInput PlaneWithInitialSurfaces(const testing::Plane& plane, double coarse_off_m,
+                                     double finer_off_m) {
+  RefineInput input = testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                              testing::PlaneMesh(plane, 40, 1.0, coarse_off_m));
+  input.initial_for_edge = [plane, finer_off_m](double edge_m) {
+    return testing::PlaneMesh(plane, 40, 0.5 * edge_m, finer_off_m);
+  };
+  return input;
+}
+
 TEST(RefineOptions, DefaultsAreValid) { EXPECT_EQ(RefineOptions().Check(), ""); }
 
 TEST(RefineOptions, InvalidValuesAreNamed) {
@@ -80,11 +92,8 @@ TEST(Refine, TiltedPlaneStartedMetresOffConverges) {
 // finer levels (initial_for_edge) is exact.
 TEST(Refine, RestartsFromTheInitialSurfaceWhenItExplainsTheImagesBetter) {
   const testing::Plane plane;
-  auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
-                                       testing::PlaneMesh(plane, 40, 1.0, 3.0));
-  input.initial_for_edge = [&plane](double edge_m) {
-    return testing::PlaneMesh(plane, 40, 0.5 * edge_m, 0.0);
-  };
+  const RefineInput input = PlaneWithInitialSurfaces(plane, /*coarse_off_m=*/3.0,
+                                                     /*finer_off_m=*/0.0);
   RefineOptions o = SmallOptions();
   o.iterations_per_level = 1;
   const RefineResult result = Refine(input, o);
@@ -111,11 +120,8 @@ TEST(Refine, RestartsFromTheInitialSurfaceWhenItExplainsTheImagesBetter) {
 // surface for the finer levels is 3 m off), the finer levels stop measuring it.
 TEST(Refine, StopsMeasuringTheInitialSurfaceOnceTheChainWinsClearly) {
   const testing::Plane plane;
-  auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
-                                       testing::PlaneMesh(plane, 40, 1.0, 0.0));
-  input.initial_for_edge = [&plane](double edge_m) {
-    return testing::PlaneMesh(plane, 40, 0.5 * edge_m, 3.0);
-  };
+  const RefineInput input = PlaneWithInitialSurfaces(plane, /*coarse_off_m=*/0.0,
+                                                     /*finer_off_m=*/3.0);
   RefineOptions o = SmallOptions();
   o.iterations_per_level = 1;
   const RefineResult result = Refine(input, o);
