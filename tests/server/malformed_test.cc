@@ -58,6 +58,8 @@ std::vector<Case> Cases(const std::string& job_id) {
       {"POST", exec, With([](json& j) { j["options"]["levels"] = 99; }), 400, "levels"},
       {"POST", exec, With([](json& j) { j["options"]["iterations_per_level"] = -1; }), 400, "iterations"},
       {"POST", exec, With([](json& j) { j["options"]["levels"] = 1.5; }), 400, "options.levels"},
+      {"POST", exec, With([](json& j) { j["options"]["hit_maps_every"] = 0; }), 400, "hit_maps_every"},
+      {"POST", exec, With([](json& j) { j["options"]["hit_maps_every"] = "2"; }), 400, "options.hit_maps_every"},
       {"POST", exec, With([](json& j) { j["outputs"] = {{"crs", 4326}}; }), 400, "outputs.crs"},
       {"POST", exec, With([](json& j) { j["images"][1]["href"] = "nope.tif"; }), 400, "images[1].href"},
       {"POST", exec, With([](json& j) { j["images"][0]["href"] = "../a.tif"; }), 403, "images[0].href"},

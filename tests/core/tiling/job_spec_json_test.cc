@@ -41,6 +41,16 @@ TEST(JobSpecFromJson, ReadsTheHoleFillingDistance) {
   EXPECT_NE(ErrorOf(job).find("initial.fill_holes_m"), std::string::npos) << ErrorOf(job);
 }
 
+TEST(JobSpecFromJson, ReadsHowOftenHitMapsAreMadeAnew) {
+  json job = MinimalJob();
+  EXPECT_EQ(proto::JobSpecFromJson(job, "/base").refine.hit_maps_every, 2);
+  job["options"]["hit_maps_every"] = 1;
+  EXPECT_EQ(proto::JobSpecFromJson(job, "/base").refine.hit_maps_every, 1);
+  job["options"]["hit_maps_every"] = 21;
+  EXPECT_NE(ErrorOf(job).find("hit_maps_every must be in [1, 20]"), std::string::npos)
+      << ErrorOf(job);
+}
+
 TEST(JobSpecFromJson, ReadsAoiAndTiling) {
   json job = MinimalJob();
   job["aoi"] = {{"bbox", {10, 20, 110, 220}}, {"crs", "EPSG:32617"}};
