@@ -307,8 +307,7 @@ void RasterizeHitMapWith(const TriangleMesh& mesh, const std::vector<FaceRecord>
   const int w = view->width(), h = view->height();
   const size_t n = size_t(w) * h;
   map.hits.resize(n);  // written where a face is drawn; the pass below marks the rest
-  map.surface.resize(n);
-  if (with_ray_cos) map.ray_cos.resize(n);
+  map.surface.resize(n);  // (ray_cos is sized by FillHitPoints)
   ws.depth.assign(n, std::numeric_limits<float>::infinity());
   ProjectVertices(mesh, *view, MeanRayDirection(*view), &ws);
 #pragma omp parallel
