@@ -30,11 +30,11 @@ double Seconds(Clock::time_point since) {
 // (the last one only measures), smoothing and the update `iterations` times.
 StageTimes PerIteration(const LevelStats& level) {
   const double passes = level.iterations + 1, steps = std::max(1, level.iterations);
-  return {level.times.raycast_s / passes, level.times.gradient_s / passes,
+  return {level.times.hit_maps_s / passes, level.times.gradient_s / passes,
           level.times.smoothness_s / steps, level.times.update_s / steps,
           level.times.intersect_s / passes};
 }
-double Sum(const StageTimes& t) { return t.raycast_s + t.gradient_s + t.smoothness_s + t.update_s; }
+double Sum(const StageTimes& t) { return t.hit_maps_s + t.gradient_s + t.smoothness_s + t.update_s; }
 
 nlohmann::json MachineJson(const MachineInfo& m) {
   return {{"cpu_model", m.cpu_model}, {"num_cpus", m.num_cpus}, {"mem_total_gib", m.mem_total_gib},
@@ -68,13 +68,13 @@ std::string ResolveJob(const Args& args, const std::string& out, nlohmann::json*
 void PrintLevels(const RefineResult& refine) {
   std::printf("\n%5s %5s %9s %9s %6s %15s | per iteration [s]: %8s %8s %8s %8s %8s | %9s %8s"
               " | initial surface\n",
-              "level", "iters", "vertices", "faces", "GSD_m", "mean ZNCC", "raycast", "gradient",
+              "level", "iters", "vertices", "faces", "GSD_m", "mean ZNCC", "hit_maps", "gradient",
               "smooth", "update", "total", "intersect", "level_s");
   for (const auto& level : refine.levels) {
     const StageTimes t = PerIteration(level);
     std::printf("%5d %5d %9d %9d %6.2f %7.4f->%7.4f | %18s %8.3f %8.3f %8.3f %8.3f %8.3f | %9.3f %8.1f",
                 level.level, level.iterations, level.num_vertices, level.num_faces, level.gsd_m,
-                level.mean_zncc.front(), level.mean_zncc.back(), "", t.raycast_s, t.gradient_s,
+                level.mean_zncc.front(), level.mean_zncc.back(), "", t.hit_maps_s, t.gradient_s,
                 t.smoothness_s, t.update_s, Sum(t), t.intersect_s, level.level_s);
     if (std::isnan(level.initial_zncc)) std::printf(" |\n");
     else std::printf(" | ZNCC %.4f, %s (%.1f s)\n", level.initial_zncc,
@@ -160,7 +160,7 @@ int RunBench(const std::vector<std::string>& argv) {
       levels.push_back({{"level", level.level}, {"iterations", level.iterations},
                         {"vertices", level.num_vertices}, {"faces", level.num_faces},
                         {"gsd_m", level.gsd_m}, {"mean_zncc", level.mean_zncc},
-                        {"per_iteration_s", {{"raycast", t.raycast_s}, {"gradient", t.gradient_s},
+                        {"per_iteration_s", {{"hit_maps", t.hit_maps_s}, {"gradient", t.gradient_s},
                                              {"smoothness", t.smoothness_s}, {"update", t.update_s},
                                              {"total", Sum(t)}, {"intersect", t.intersect_s}}},
                         {"initial_zncc", level.initial_zncc},

@@ -49,17 +49,18 @@ int RunBias(const std::vector<std::string>& argv) {
   const JobSpec spec = ReadJobWithOverrides(job_path, args.GetAll("set"));
   const TileInput input = PrepareJobInput(spec);
   const int num_views = int(input.refine.views.size());
-  const auto pairs = args.Has("pairs") ? ParsePairs(args.Require("pairs"), num_views)
-                                       : SelectRefinePairs(input.refine, spec.refine);
   BiasOptions options;
   options.refine = spec.refine;
   options.reference_view = args.GetInt("reference", -1);
   SATMESH_CHECK(options.reference_view < num_views, ErrorCode::kInvalidArgument,
                 "--reference " + std::to_string(options.reference_view) + " out of range");
+  const BiasEstimate estimate =
+      args.Has("pairs")
+          ? EstimateViewBiases(input.refine, ParsePairs(args.Require("pairs"), num_views), options)
+          : EstimateRefineBiases(input.refine, options);
   std::printf("pairs:");
-  for (const auto& [a, b] : pairs) std::printf(" %d-%d", a, b);
+  for (const auto& [a, b] : estimate.pairs) std::printf(" %d-%d", a, b);
   std::printf("\n");
-  const BiasEstimate estimate = EstimateViewBiases(input.refine, pairs, options);
 
   std::vector<Eigen::Vector2d> totals;
   for (const auto& image : spec.images) totals.push_back(image.bias_col_row_px);

@@ -50,10 +50,11 @@ int RunZncc(const std::vector<std::string>& argv) {
   if (args.Has("estimate-bias")) {
     BiasOptions bias;
     bias.refine = spec.refine;
-    const auto bias_pairs = args.Has("bias-pairs")
-                                ? ParsePairs(args.Require("bias-pairs"), num_views)
-                                : SelectRefinePairs(input.refine, spec.refine);
-    ApplyViewBiases(EstimateViewBiases(input.refine, bias_pairs, bias), &input.refine);
+    ApplyViewBiases(args.Has("bias-pairs")
+                        ? EstimateViewBiases(input.refine,
+                                             ParsePairs(args.Require("bias-pairs"), num_views), bias)
+                        : EstimateRefineBiases(input.refine, bias),
+                    &input.refine);
   }
   for (int v = 0; v < num_views; ++v) {
     const RefineView& view = input.refine.views[v];

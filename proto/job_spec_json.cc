@@ -79,7 +79,11 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "estimate_bias") r->estimate_bias = Boolean(v, path);
     else if (key == "min_pair_angle_deg") r->pairs.min_angle_deg = Number(v, path);
     else if (key == "max_pair_angle_deg") r->pairs.max_angle_deg = Number(v, path);
+    else if (key == "optimal_pair_angle_deg") r->pairs.optimal_angle_deg = Number(v, path);
+    else if (key == "min_pair_overlap") r->pairs.min_overlap = Number(v, path);
+    else if (key == "pair_partners_per_view") r->pairs.partners_per_view = Integer(v, path);
     else if (key == "max_pairs_per_image") r->pairs.max_pairs_per_image = Integer(v, path);
+    else if (key == "max_pairs") r->pairs.max_pairs = Integer(v, path);
     else if (key == "min_contrast") r->pairs.min_contrast = Number(v, path);
     else Bad(path, "unknown option");
   }
@@ -220,7 +224,7 @@ json LevelsToJson(const std::vector<LevelStats>& levels) {
                    {"mean_zncc_end", l.mean_zncc.empty() ? 0.0 : l.mean_zncc.back()},
                    {"initial_zncc", l.initial_zncc},  // NaN (null): not compared
                    {"restarted_from_initial", l.restarted},
-                   {"time_s", {{"raycast", l.times.raycast_s},
+                   {"time_s", {{"hit_maps", l.times.hit_maps_s},
                                {"intersect", l.times.intersect_s},
                                {"gradient", l.times.gradient_s},
                                {"smoothness", l.times.smoothness_s},

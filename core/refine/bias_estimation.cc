@@ -25,7 +25,7 @@ std::string Num(double v) { return std::to_string(v); }
 struct Problem {
   const RefineInput& input;
   const BiasOptions& options;
-  std::vector<std::vector<ImageF>> pyramids;  // per view, normalised
+  const std::vector<PreparedView>& views;    // pyramids, normalised
   std::vector<RpcModel> rpcs;                 // per view, with the biases solved so far
   const RayScene& scene;
   std::vector<Eigen::Vector3f> normals;
@@ -34,7 +34,7 @@ struct Problem {
 };
 
 ViewLevel BuildLevel(const Problem& pb, int view, int level) {
-  ViewLevel out = MakeViewLevel(view, level, pb.pyramids[view][level], pb.rpcs[view],
+  ViewLevel out = MakeViewLevel(view, level, pb.views[view].pyramid[level], pb.rpcs[view],
                                 pb.input.frame, pb.box_min, pb.box_max,
                                 pb.options.refine.virtual_camera_grid_px);
   CastHitMap(pb.scene, &out);
@@ -174,20 +174,34 @@ std::string BiasOptions::Check() const {
   if (!(search_radius_px > 0)) return "search_radius_px must be > 0, got " + Num(search_radius_px);
   if (!(coarse_step_px > 0)) return "coarse_step_px must be > 0, got " + Num(coarse_step_px);
   if (!(final_step_px > 0)) return "final_step_px must be > 0, got " + Num(final_step_px);
+  if (max_neighbours < 1) return "max_neighbours must be >= 1, got " + Num(max_neighbours);
   return refine.Check();
 }
 
-std::vector<std::pair<int, int>> SelectRefinePairs(const RefineInput& input,
-                                                   const RefineOptions& options) {
-  std::vector<PairCandidateView> candidates(input.views.size());
-  for (size_t v = 0; v < input.views.size(); ++v)
-    candidates[v] = MakePairCandidate(input.views[v].rpc, input.frame,
-                                      NormalizeRadiometry(input.views[v].image), input.min_z,
-                                      input.max_z);
-  return SelectPairs(candidates, options.pairs);
+BiasEstimate EstimateViewBiases(const RefineInput& input,
+                                const std::vector<std::pair<int, int>>& pairs,
+                                const BiasOptions& options, const Progress& progress) {
+  const std::string problem = options.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "bias options: " + problem);
+  return EstimateViewBiases(input, PrepareViews(input, options.coarse_level), pairs, options,
+                            progress);
 }
 
-BiasEstimate EstimateViewBiases(const RefineInput& input,
+BiasEstimate EstimateRefineBiases(const RefineInput& input, const BiasOptions& options,
+                                  const Progress& progress) {
+  const std::vector<PreparedView> views = PrepareViews(input, options.coarse_level);
+  const PairSelection selection = SelectViewPairs(input, views, options.refine.pairs);
+  SATMESH_CHECK(!selection.pairs.empty(), ErrorCode::kInvalidInput,
+                "bias: no usable stereo pair: " + selection.refusal);
+  std::vector<StereoPair> by_score = selection.pairs;
+  std::stable_sort(by_score.begin(), by_score.end(),
+                   [](const StereoPair& a, const StereoPair& b) { return a.score > b.score; });
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& p : by_score) pairs.emplace_back(p.i, p.j);
+  return EstimateViewBiases(input, views, pairs, options, progress);
+}
+
+BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<PreparedView>& views,
                                 const std::vector<std::pair<int, int>>& pairs,
                                 const BiasOptions& options, const Progress& progress) {
   const std::string problem = options.Check();
@@ -206,23 +220,24 @@ BiasEstimate EstimateViewBiases(const RefineInput& input,
   out.solved.assign(nv, false);
   out.zncc_before.assign(nv, 0.0);
   out.zncc_after.assign(nv, 0.0);
+  out.pairs = pairs;
   if (pairs.empty()) return out;
   out.reference_view = ReferenceView(pairs, nv, options.reference_view);
   out.solved[out.reference_view] = true;
 
   // Coarse level: reduced until the smallest image has >= 64 px at that level.
   int coarse_level = options.coarse_level;
+  for (const auto& v : views) coarse_level = std::min(coarse_level, int(v.pyramid.size()) - 1);
   for (const auto& v : input.views)
     while (coarse_level > 0 && (std::min(v.image.width, v.image.height) >> coarse_level) < 64)
       --coarse_level;
 
   const RayScene scene(input.initial_mesh);
-  Problem pb{input, options, {}, {}, scene, FaceNormals(input.initial_mesh), {}, {}, 0};
+  Problem pb{input, options, views, {}, scene, FaceNormals(input.initial_mesh), {}, {}, 0};
   SurfaceBox(input.initial_mesh, input.min_z, input.max_z, &pb.box_min, &pb.box_max);
-  for (const auto& v : input.views) {
-    pb.pyramids.push_back(GaussianPyramid(NormalizeRadiometry(v.image), coarse_level + 1));
+  for (const auto& v : views) {
     pb.rpcs.push_back(v.rpc);
-    pb.gsd_m += GroundSamplingDistance(v.rpc, input.frame) / nv;
+    pb.gsd_m += v.gsd_m / nv;
   }
 
   // Breadth-first over the pair graph: next, the view with most pairs to solved views.
@@ -233,6 +248,7 @@ BiasEstimate EstimateViewBiases(const RefineInput& input,
       if (out.solved[v]) continue;
       std::vector<int> neighbours;
       for (const auto& [a, b] : pairs) {
+        if (int(neighbours.size()) >= options.max_neighbours) break;
         if (a == v && out.solved[b]) neighbours.push_back(b);
         if (b == v && out.solved[a]) neighbours.push_back(a);
       }

@@ -12,6 +12,7 @@
 
 #include "core/common/progress.h"
 #include "core/refine/refine.h"
+#include "core/refine/view_setup.h"
 
 namespace satmesh {
 
@@ -21,6 +22,8 @@ struct BiasOptions {
   double search_radius_px = 6.0;   // grid search over +-radius per axis, full-res px, > 0
   double coarse_step_px = 2.0;     // grid spacing of the search, full-res px, > 0
   double final_step_px = 0.125;    // smallest 3x3 spacing at full resolution, full-res px, > 0
+  int max_neighbours = 3;          // solved views a view is matched against (first in the
+                                   // pair order: Refine gives them best score first), >= 1
   RefineOptions refine;            // ZNCC window, visibility, virtual cameras (as the refinement)
   std::string Check() const;
 };
@@ -30,19 +33,28 @@ struct BiasEstimate {
   std::vector<Eigen::Vector2d> bias_col_row_px;  // per view, added to its RPC's bias (full-res px)
   std::vector<bool> solved;                      // false: no pair with a solved view (bias 0)
   std::vector<double> zncc_before, zncc_after;   // per view: mean ZNCC with solved views, level 0
+  std::vector<std::pair<int, int>> pairs;        // the pairs it was estimated over
 };
-
-// Pairs as the refinement selects them (contrast, intersection angle, cap per image).
-std::vector<std::pair<int, int>> SelectRefinePairs(const RefineInput& input,
-                                                   const RefineOptions& options);
 
 // Throws Error{kInvalidArgument} if options.Check() fails or a pair index is out of
 // range, Error{kInvalidInput} for an empty initial mesh, Error{kCancelled} (checked per
 // view and level) when progress says so. input's RPCs may already carry a bias; the
-// estimate is added to it.
+// estimate is added to it. A view's solved neighbours are taken in the order of `pairs`
+// (best first), at most options.max_neighbours of them.
 BiasEstimate EstimateViewBiases(const RefineInput& input,
                                 const std::vector<std::pair<int, int>>& pairs,
                                 const BiasOptions& options = {}, const Progress& progress = {});
+
+// The same over views prepared once (PrepareViews; the RPCs are the views', pyramids with
+// at least one level): what Refine calls.
+BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<PreparedView>& views,
+                                const std::vector<std::pair<int, int>>& pairs,
+                                const BiasOptions& options, const Progress& progress);
+
+// Refine's first three steps as one call, for the CLI's bias and zncc commands: prepare
+// the views, select the pairs as the refinement does, estimate the biases over them.
+BiasEstimate EstimateRefineBiases(const RefineInput& input, const BiasOptions& options,
+                                  const Progress& progress = {});
 
 // input with each view's RPC bias increased by estimate.bias_col_row_px[v].
 void ApplyViewBiases(const BiasEstimate& estimate, RefineInput* input);

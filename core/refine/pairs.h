@@ -1,8 +1,15 @@
 #pragma once
-// Stereo pair selection (paper 4.2): pairs whose viewing directions intersect at
-// min..max degrees, images with poor contrast dropped, at most N pairs per image
-// (preferring angles near the middle of the range).
+// Stereo pair selection (paper 4.2, generalised to the view sets users have): every pair
+// of usable views whose footprints overlap the surface and whose viewing directions
+// converge by min..max degrees is a candidate; candidates are ranked by what they
+// contribute (PairScore: height precision, occlusion, overlap, similarity of the two
+// acquisitions); the selection first connects every usable view (a maximum spanning
+// forest, so that the per-view bias estimation reaches every refined view), then gives
+// each view partners, then fills a budget of pairs that keeps the speed.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -11,13 +18,51 @@
 namespace satmesh {
 
 struct PairCandidateView {
-  Eigen::Vector3d direction;  // unit viewing direction (towards the ground)
-  double contrast = 0;        // std of the normalised image
+  Eigen::Vector3d direction{0, 0, -1};  // unit viewing direction (towards the ground)
+  double contrast = 0;                   // std of the normalised image
+  // Ground footprint of the image window at the surface's mid height, frame x/y (m);
+  // empty: unknown (taken to cover the surface).
+  Eigen::AlignedBox2d footprint;
+  // Acquisition (image metadata); NaN where unknown.
+  double sun_elevation_deg = std::numeric_limits<double>::quiet_NaN();
+  double sun_azimuth_deg = std::numeric_limits<double>::quiet_NaN();
+  double time_s = std::numeric_limits<double>::quiet_NaN();  // unix seconds
 };
 
-std::vector<std::pair<int, int>> SelectPairs(const std::vector<PairCandidateView>& views,
-                                             const PairOptions& options);
+struct StereoPair {
+  int i = 0, j = 0;        // views, i < j
+  double angle_deg = 0;    // intersection angle of the central viewing directions
+  double overlap = 0;      // fraction of the surface box both footprints cover, [0, 1]
+  double score = 0;        // PairScore, (0, 1]
+};
+
+struct PairSelection {
+  std::vector<StereoPair> pairs;    // selected, sorted by (i, j)
+  int num_candidates = 0;           // pairs that passed angle, overlap and contrast
+  std::vector<int> unpaired_views;  // usable views left without a partner
+  std::string refusal;              // no pair at all: why (names views and angles)
+  std::vector<std::pair<int, int>> IndexPairs() const;
+};
 
 double IntersectionAngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+
+// What a candidate pair contributes, (0, 1]: the product of
+//  - height precision: min(1, angle / optimal_angle) (B/H grows with the angle; beyond
+//    the optimum the visibility test, not precision, limits a pair),
+//  - occlusion: 1 up to the optimal angle, falling linearly to 0.5 at max_angle_deg,
+//  - overlap: the fraction of the surface both images see,
+//  - sun: 0.25 + 0.75 exp(-(dsun / 25 deg)^2), dsun the angle between the sun directions
+//    (shadows move between dates), 1 where unknown,
+//  - date: 0.5 + 0.5 exp(-ddays / 180) (vegetation, cars, construction), 1 where unknown.
+double PairScore(const PairCandidateView& a, const PairCandidateView& b, double angle_deg,
+                 double overlap, const PairOptions& options);
+
+// Fraction of `surface` (frame x/y) covered by both footprints (empty footprint: all).
+double FootprintOverlap(const Eigen::AlignedBox2d& a, const Eigen::AlignedBox2d& b,
+                        const Eigen::AlignedBox2d& surface);
+
+// The selection described above; never throws. An empty result carries the reason.
+PairSelection SelectPairs(const std::vector<PairCandidateView>& views,
+                          const Eigen::AlignedBox2d& surface, const PairOptions& options);
 
 }  // namespace satmesh

@@ -13,6 +13,7 @@
 #include "core/common/error.h"
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
+#include "core/refine/bias_estimation.h"
 #include "core/refine/coarse_mesh.h"
 #include "core/refine/hit_map_raster.h"
 #include "core/refine/pairs.h"
@@ -56,17 +57,11 @@ void CheckInput(const RefineInput& input) {
                 "refine: empty height range [min_z, max_z]");
 }
 
-// Everything of one view that does not depend on the level.
-struct ViewSource {
-  std::vector<ImageF> pyramid;  // normalised
-  RpcModel rpc;
-};
-
 struct LevelContext {
   const RefineInput& input;
   const RefineOptions& options;
   const Progress& progress;
-  std::vector<ViewSource>& sources;
+  const std::vector<PreparedView>& sources;
   std::vector<std::pair<int, int>>& pairs;
   double gsd_m;
 };
@@ -125,7 +120,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
 
 // The level data of every view that takes part in a pair; slot[view] indexes it (-1: none).
 std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
-                                      const std::vector<ViewSource>& sources,
+                                      const std::vector<PreparedView>& sources,
                                       const std::vector<std::pair<int, int>>& pairs,
                                       const TriangleMesh& mesh, int level, int grid_px,
                                       std::vector<int>* slot) {
@@ -144,18 +139,9 @@ std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
   return views;
 }
 
-std::vector<ViewSource> MakeViewSources(const RefineInput& input, int levels) {
-  std::vector<ViewSource> sources(input.views.size());
-  for (size_t v = 0; v < input.views.size(); ++v) {
-    sources[v].pyramid = GaussianPyramid(NormalizeRadiometry(input.views[v].image), levels + 1);
-    sources[v].rpc = input.views[v].rpc;
-  }
-  return sources;
-}
-
 // Mean ZNCC of `mesh` over `pairs` at `level`, without changing anything; hit maps
 // rasterized or cast with Embree.
-double LevelZncc(const RefineInput& input, const std::vector<ViewSource>& sources,
+double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sources,
                  const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
                  double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize) {
   std::vector<int> slot;
@@ -216,7 +202,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
         stats.times.intersect_s += CastHitMap(*scene, &v, &normals);
       }
     }
-    stats.times.raycast_s += Seconds(t0);
+    stats.times.hit_maps_s += Seconds(t0);
 
     t0 = Clock::now();
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
@@ -286,52 +272,57 @@ TriangleMesh InitialSurfaceAt(const RefineInput& input, const RefineOptions& opt
   return input.initial_for_edge(LevelEdge(options, gsd_m, level));
 }
 
-}  // namespace
-
-double MeasureMeanZncc(const RefineInput& input, const TriangleMesh& mesh,
-                       const std::vector<std::pair<int, int>>& pairs, int level,
-                       const RefineOptions& options) {
-  const std::string problem = options.Check();
-  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "refine options: " + problem);
-  const double gsd = GroundSamplingDistance(input.views[pairs.front().first].rpc, input.frame) *
-                     std::ldexp(1.0, level);
-  return LevelZncc(input, MakeViewSources(input, level), pairs, options, gsd, level, mesh,
-                   /*rasterize=*/false);
+// Step 2: the pairs, or an error that says why there is none.
+PairSelection SelectPairsOrThrow(const RefineInput& input, const std::vector<PreparedView>& views,
+                                 const PairOptions& options) {
+  PairSelection selection = SelectViewPairs(input, views, options);
+  SATMESH_CHECK(!selection.pairs.empty(), ErrorCode::kInvalidInput,
+                "refine: no usable stereo pair among " + std::to_string(views.size()) +
+                    " views: " + selection.refusal);
+  for (const StereoPair& p : selection.pairs)
+    spdlog::info("refine: pair {}-{} ({} / {}): {:.1f} deg, overlap {:.2f}, score {:.3f}", p.i,
+                 p.j, input.views[p.i].name, input.views[p.j].name, p.angle_deg, p.overlap,
+                 p.score);
+  if (!selection.unpaired_views.empty())
+    spdlog::warn("refine: {} usable view(s) have no partner within the angle and overlap "
+                 "bounds; they are not used",
+                 selection.unpaired_views.size());
+  return selection;
 }
 
-RefineResult Refine(const RefineInput& input, const RefineOptions& options,
-                    const Progress& progress) {
-  const std::string problem = options.Check();
-  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "refine options: " + problem);
-  CheckInput(input);
-  const auto start = Clock::now();
-  RefineResult result;
-
-  // Radiometric normalisation and pyramids; viewing directions for pair selection.
-  std::vector<ViewSource> sources = MakeViewSources(input, options.levels);
-  progress.ThrowIfCancelled();
-  std::vector<PairCandidateView> candidates(input.views.size());
-  double gsd_sum = 0;
-  for (size_t v = 0; v < input.views.size(); ++v) {
-    candidates[v] = MakePairCandidate(input.views[v].rpc, input.frame, sources[v].pyramid[0],
-                                      input.min_z, input.max_z);
-    gsd_sum += GroundSamplingDistance(input.views[v].rpc, input.frame);
+// Step 3: per-view RPC bias shifts over the initial surface, through the selected pairs
+// (connected where the views can be: one reference reaches every refined view). Changes
+// the prepared views' RPCs.
+void EstimateBiases(const RefineInput& input, const PairSelection& selection,
+                    const RefineOptions& options, const Progress& progress,
+                    std::vector<PreparedView>* views, RefineResult* result) {
+  const auto t0 = Clock::now();
+  BiasOptions bias;
+  bias.refine = options;
+  std::vector<StereoPair> by_score = selection.pairs;
+  std::stable_sort(by_score.begin(), by_score.end(),
+                   [](const StereoPair& a, const StereoPair& b) { return a.score > b.score; });
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& p : by_score) pairs.emplace_back(p.i, p.j);
+  const BiasEstimate estimate = EstimateViewBiases(input, *views, pairs, bias, progress);
+  for (size_t v = 0; v < views->size(); ++v) {
+    RpcModel& rpc = (*views)[v].rpc;
+    rpc = rpc.WithBias(rpc.bias() + estimate.bias_col_row_px[v]);
   }
-  result.gsd_m = gsd_sum / input.views.size();
-  result.pairs = SelectPairs(candidates, options.pairs);
-  SATMESH_CHECK(!result.pairs.empty(), ErrorCode::kInvalidInput,
-                "refine: no stereo pair with an intersection angle in [" +
-                    std::to_string(options.pairs.min_angle_deg) + ", " +
-                    std::to_string(options.pairs.max_angle_deg) + "] degrees");
-  spdlog::info("refine: {} views, {} pairs, GSD {:.3f} m", input.views.size(),
-               result.pairs.size(), result.gsd_m);
+  result->view_bias_px = estimate.bias_col_row_px;
+  result->bias_s = Seconds(t0);
+}
 
-  // Coarse to fine. Below the coarsest level, the previous level's result (subdivided)
-  // competes with the initial surface: a DSM as sharp as the images loses detail on the
-  // coarse levels that their iterations do not win back (BENCHMARKS.md, Pléiades).
+// Step 4: coarse to fine. Below the coarsest level, the previous level's result
+// (subdivided) competes with the initial surface: a DSM as sharp as the images loses
+// detail on the coarse levels that their iterations do not win back (BENCHMARKS.md,
+// Pléiades).
+void CoarseToFine(const RefineInput& input, const RefineOptions& options,
+                  const Progress& progress, const std::vector<PreparedView>& views,
+                  RefineResult* result) {
   TriangleMesh mesh =
-      RemeshForLevel(input.initial_mesh, options, result.gsd_m, options.levels, progress);
-  const LevelContext ctx{input, options, progress, sources, result.pairs, result.gsd_m};
+      RemeshForLevel(input.initial_mesh, options, result->gsd_m, options.levels, progress);
+  const LevelContext ctx{input, options, progress, views, result->pairs, result->gsd_m};
   bool check_initial = options.restart_from_initial;
   for (int level = options.levels; level >= 0; --level) {
     const auto level_start = Clock::now();
@@ -342,9 +333,9 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
       SortSpatially(&mesh);
       if (check_initial) {
         const auto t0 = Clock::now();
-        initial = InitialSurfaceAt(input, options, result.gsd_m, level);
-        initial_zncc = LevelZncc(input, sources, result.pairs, options,
-                                 result.gsd_m * std::ldexp(1.0, level), level, initial,
+        initial = InitialSurfaceAt(input, options, result->gsd_m, level);
+        initial_zncc = LevelZncc(input, views, result->pairs, options,
+                                 result->gsd_m * std::ldexp(1.0, level), level, initial,
                                  options.rasterize_hit_maps);
         check_s = Seconds(t0);
       }
@@ -355,7 +346,7 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
       spdlog::info("level {}: the previous level's mean ZNCC {:.4f} does not beat the "
                    "initial surface's {:.4f} by {}; restarting from the initial surface",
                    level, stats.mean_zncc.front(), initial_zncc, kKeepMargin);
-      mesh = RemeshForLevel(std::move(initial), options, result.gsd_m, level, progress);
+      mesh = RemeshForLevel(std::move(initial), options, result->gsd_m, level, progress);
       RefineLevel(ctx, level, std::numeric_limits<double>::quiet_NaN(), &mesh, &stats);
       restarted = true;
     } else if (!std::isnan(initial_zncc)) {
@@ -369,9 +360,56 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& options,
     stats.restarted = restarted;
     stats.initial_check_s = check_s;
     stats.level_s = Seconds(level_start);
-    result.levels.push_back(std::move(stats));
+    result->levels.push_back(std::move(stats));
   }
-  result.mesh = std::move(mesh);
+  result->mesh = std::move(mesh);
+}
+
+double MeanGsd(const std::vector<PreparedView>& views) {
+  double sum = 0;
+  for (const auto& v : views) sum += v.gsd_m;
+  return sum / double(views.size());
+}
+
+}  // namespace
+
+double MeasureMeanZncc(const RefineInput& input, const TriangleMesh& mesh,
+                       const std::vector<std::pair<int, int>>& pairs, int level,
+                       const RefineOptions& options) {
+  const std::string problem = options.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "refine options: " + problem);
+  const std::vector<PreparedView> views = PrepareViews(input, level);
+  const double gsd = views[pairs.front().first].gsd_m * std::ldexp(1.0, level);
+  return LevelZncc(input, views, pairs, options, gsd, level, mesh, /*rasterize=*/false);
+}
+
+RefineResult Refine(const RefineInput& input, const RefineOptions& options,
+                    const Progress& progress) {
+  const std::string problem = options.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "refine options: " + problem);
+  CheckInput(input);
+  const auto start = Clock::now();
+  RefineResult result;
+
+  // 1. Normalisation, pyramids (deep enough for the bias search too), pair candidates.
+  std::vector<PreparedView> views =
+      PrepareViews(input, std::max(options.levels, options.estimate_bias ? BiasOptions().coarse_level : 0));
+  result.gsd_m = MeanGsd(views);
+  progress.ThrowIfCancelled();
+
+  // 2. Pairs.
+  const PairSelection selection = SelectPairsOrThrow(input, views, options.pairs);
+  result.pairs = selection.IndexPairs();
+  result.pair_details = selection.pairs;
+  result.candidate_pairs = selection.num_candidates;
+  spdlog::info("refine: {} views, {} pairs of {} candidates, GSD {:.3f} m", input.views.size(),
+               result.pairs.size(), selection.num_candidates, result.gsd_m);
+
+  // 3. Per-view RPC biases.
+  if (options.estimate_bias) EstimateBiases(input, selection, options, progress, &views, &result);
+
+  // 4. Coarse to fine.
+  CoarseToFine(input, options, progress, views, &result);
   result.total_s = Seconds(start);
   progress.Report(1.0, "done");
   return result;

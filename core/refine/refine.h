@@ -11,15 +11,25 @@
 #include "core/geo/local_frame.h"
 #include "core/image/image.h"
 #include "core/mesh/mesh.h"
+#include "core/refine/pairs.h"
 #include "core/refine/refine_options.h"
 #include "core/rpc/rpc_model.h"
 
 namespace satmesh {
 
+// Acquisition metadata of an image (vendor metadata where the file has it), for pair
+// selection; NaN where unknown.
+struct ViewAcquisition {
+  double sun_elevation_deg = std::numeric_limits<double>::quiet_NaN();
+  double sun_azimuth_deg = std::numeric_limits<double>::quiet_NaN();
+  double time_s = std::numeric_limits<double>::quiet_NaN();  // unix seconds
+};
+
 struct RefineView {
   std::string name;
   ImageF image;  // full-resolution window, raw digital numbers
   RpcModel rpc;  // pixel coordinates relative to the window (RpcModel::Cropped)
+  ViewAcquisition acquisition;
 };
 
 struct RefineInput {
@@ -33,8 +43,9 @@ struct RefineInput {
 };
 
 struct StageTimes {
-  double raycast_s = 0, gradient_s = 0, smoothness_s = 0, update_s = 0;
-  double intersect_s = 0;  // the part of raycast_s spent in Embree's Intersect alone
+  double hit_maps_s = 0;   // hit maps: rasterized, followed, or cast with Embree
+  double gradient_s = 0, smoothness_s = 0, update_s = 0;
+  double intersect_s = 0;  // the part of hit_maps_s spent in Embree's Intersect alone
 };
 
 struct LevelStats {
@@ -54,7 +65,12 @@ struct LevelStats {
 
 struct RefineResult {
   TriangleMesh mesh;                   // in the input frame
-  std::vector<std::pair<int, int>> pairs;
+  std::vector<std::pair<int, int>> pairs;  // selected (view indices), sorted
+  std::vector<StereoPair> pair_details;    // the same, with angle, overlap and score
+  int candidate_pairs = 0;                 // pairs that passed angle, overlap and contrast
+  // estimate_bias: shift added to each view's RPC (full-res px, col/row), and its time.
+  std::vector<Eigen::Vector2d> view_bias_px;
+  double bias_s = 0;
   std::vector<LevelStats> levels;
   double gsd_m = 0;                    // full-resolution GSD
   double total_s = 0;
@@ -67,8 +83,11 @@ double MeasureMeanZncc(const RefineInput& input, const TriangleMesh& mesh,
                        const std::vector<std::pair<int, int>>& pairs, int level,
                        const RefineOptions& options = {});
 
-// Throws Error{kInvalidArgument} if options.Check() fails, Error{kInvalidInput} for
-// unusable input (no pair, empty mesh), Error{kCancelled} when progress says so.
+// The refinement's steps, in order: PrepareViews (normalise once, pyramids, pair
+// candidates), SelectViewPairs, EstimateViewBiases (options.estimate_bias), then coarse to
+// fine. Throws Error{kInvalidArgument} if options.Check() fails, Error{kInvalidInput} for
+// unusable input (no usable pair: the message says why; empty mesh), Error{kCancelled}
+// when progress says so.
 RefineResult Refine(const RefineInput& input, const RefineOptions& options,
                     const Progress& progress = {});
 

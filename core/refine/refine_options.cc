@@ -12,8 +12,16 @@ std::string PairOptions::Check() const {
     return "pairs.min_angle_deg must be in (0, 90), got " + Num(min_angle_deg);
   if (!(max_angle_deg > min_angle_deg && max_angle_deg < 90))
     return "pairs.max_angle_deg must be in (min_angle_deg, 90), got " + Num(max_angle_deg);
+  if (!(optimal_angle_deg >= min_angle_deg && optimal_angle_deg <= max_angle_deg))
+    return "pairs.optimal_angle_deg must be in [min_angle_deg, max_angle_deg], got " +
+           Num(optimal_angle_deg);
+  if (!(min_overlap >= 0 && min_overlap <= 1))
+    return "pairs.min_overlap must be in [0, 1], got " + Num(min_overlap);
+  if (partners_per_view < 1)
+    return "pairs.partners_per_view must be >= 1, got " + Num(partners_per_view);
   if (max_pairs_per_image < 1)
     return "pairs.max_pairs_per_image must be >= 1, got " + Num(max_pairs_per_image);
+  if (max_pairs < 0) return "pairs.max_pairs must be >= 0, got " + Num(max_pairs);
   if (!(min_contrast >= 0)) return "pairs.min_contrast must be >= 0, got " + Num(min_contrast);
   return "";
 }

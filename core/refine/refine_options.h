@@ -5,11 +5,18 @@
 
 namespace satmesh {
 
-// Stereo pair selection (paper 4.2).
+// Stereo pair selection (core/refine/pairs.h): candidates, their score, the selection.
 struct PairOptions {
-  double min_angle_deg = 5.0;    // min intersection angle of the viewing directions, (0, 90)
-  double max_angle_deg = 13.0;   // max intersection angle, (min_angle_deg, 90)
-  int max_pairs_per_image = 4;   // cap on pairs that involve one image, >= 1
+  double min_angle_deg = 2.0;    // min intersection angle of the viewing directions: below,
+                                 // a pair does not constrain the height, (0, 90)
+  double max_angle_deg = 60.0;   // max intersection angle, (min_angle_deg, 90)
+  double optimal_angle_deg = 20.0;  // angle from which the height precision no longer limits a
+                                    // pair (B/H 0.35); wider pairs score lower for occlusion,
+                                    // [min_angle_deg, max_angle_deg]
+  double min_overlap = 0.25;     // fraction of the surface both images must see, [0, 1]
+  int partners_per_view = 3;     // pairs each view gets where candidates allow, >= 1
+  int max_pairs_per_image = 6;   // cap on pairs that involve one image, >= 1
+  int max_pairs = 0;             // pairs in all; 0: 1.5 per view, at least 10 (pairs.cc), >= 0
   double min_contrast = 0.02;    // images whose normalised std is below this are dropped, >= 0
   std::string Check() const;
 };

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/refine/view_level.h"
 #include "core/refine/virtual_camera.h"
 
 namespace satmesh {
@@ -28,7 +29,42 @@ PairCandidateView MakePairCandidate(const RpcModel& rpc, const LocalFrame& frame
   const VirtualCamera camera(rpc, frame, normalised.width, normalised.height, min_z - 1,
                              max_z + 1, std::max(normalised.width, normalised.height));
   out.direction = camera.CentralDirection();
+  const double z_mid = 0.5 * (min_z + max_z);
+  for (double col : {0.0, double(normalised.width)})
+    for (double row : {0.0, double(normalised.height)}) {
+      const Ray ray = camera.PixelRay(col, row);
+      if (std::abs(ray.direction.z()) < 1e-9) continue;
+      const Eigen::Vector3d origin = ray.origin.cast<double>(), dir = ray.direction.cast<double>();
+      out.footprint.extend((origin + (z_mid - origin.z()) / dir.z() * dir).head<2>());
+    }
   return out;
+}
+
+std::vector<PreparedView> PrepareViews(const RefineInput& input, int levels) {
+  std::vector<PreparedView> out(input.views.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long v = 0; v < long(input.views.size()); ++v) {
+    const RefineView& view = input.views[v];
+    PreparedView& p = out[v];
+    p.pyramid = GaussianPyramid(NormalizeRadiometry(view.image), levels + 1);
+    p.rpc = view.rpc;
+    p.candidate = MakePairCandidate(view.rpc, input.frame, p.pyramid[0], input.min_z, input.max_z);
+    p.candidate.sun_elevation_deg = view.acquisition.sun_elevation_deg;
+    p.candidate.sun_azimuth_deg = view.acquisition.sun_azimuth_deg;
+    p.candidate.time_s = view.acquisition.time_s;
+    p.gsd_m = GroundSamplingDistance(view.rpc, input.frame);
+  }
+  return out;
+}
+
+PairSelection SelectViewPairs(const RefineInput& input, const std::vector<PreparedView>& views,
+                              const PairOptions& options) {
+  Eigen::Vector3d box_min, box_max;
+  SurfaceBox(input.initial_mesh, input.min_z, input.max_z, &box_min, &box_max);
+  std::vector<PairCandidateView> candidates;
+  for (const auto& v : views) candidates.push_back(v.candidate);
+  return SelectPairs(candidates, Eigen::AlignedBox2d(box_min.head<2>(), box_max.head<2>()),
+                     options);
 }
 
 PhotometricOptions PhotometricOptionsAt(const RefineOptions& opt, double gsd_m) {

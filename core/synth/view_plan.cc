@@ -33,6 +33,9 @@ class Planner {
     pair_options_.max_angle_deg = o.max_pair_angle_deg - o.window_margin_deg;
     pair_options_.max_pairs_per_image = o.max_pairs_per_image;
     pair_options_.min_contrast = 0;
+    pair_options_.optimal_angle_deg = pair_options_.min_angle_deg;
+    pair_options_.partners_per_view = o.max_pairs_per_image;
+    pair_options_.max_pairs = o.num_views * o.max_pairs_per_image;
     azimuth0_ = 360 * U();
   }
 
@@ -55,7 +58,7 @@ class Planner {
     for (size_t i = 0; i < views.size(); ++i)
       for (size_t j = i + 1; j < views.size(); ++j)
         too_close += IntersectionAngleDeg(views[i].direction, views[j].direction) < o_.min_separation_deg;
-    *pairs = SelectPairs(views, pair_options_);
+    *pairs = SelectPairs(views, Eigen::AlignedBox2d(), pair_options_).IndexPairs();
     std::vector<int> count(views.size(), 0);
     for (const auto& [a, b] : *pairs) ++count[a], ++count[b];
     int deficit = 0;

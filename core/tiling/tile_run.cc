@@ -12,7 +12,6 @@
 #include "core/dsm/dsm.h"
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
-#include "core/refine/bias_estimation.h"
 #include "core/tiling/tile_input.h"
 
 namespace satmesh {
@@ -136,20 +135,10 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
     r.image_mb = input.image_bytes / (1 << 20);
     r.prepare_s = Seconds(t0);
 
-    if (spec.refine.estimate_bias) {
-      t0 = Clock::now();
-      BiasOptions bias;
-      bias.refine = spec.refine;
-      const BiasEstimate estimate =
-          EstimateViewBiases(input.refine, SelectRefinePairs(input.refine, spec.refine), bias,
-                             progress);
-      ApplyViewBiases(estimate, &input.refine);
-      r.view_bias_px = estimate.bias_col_row_px;
-      r.bias_s = Seconds(t0);
-    }
-
     t0 = Clock::now();
     r.refine = Refine(input.refine, spec.refine, progress);
+    r.view_bias_px = r.refine.view_bias_px;
+    r.bias_s = r.refine.bias_s;
     r.refine_s = Seconds(t0);
 
     t0 = Clock::now();

@@ -148,7 +148,7 @@ TEST(PlanViews, EveryViewHasStereoPartnersUnderTheRefinementsSelection) {
       views.push_back({-SatelliteDirection(d), 1.0});  // towards the ground, as the refinement
       azimuths.push_back(d.y());
     }
-    const auto pairs = SelectPairs(views, PairOptions{});
+    const auto pairs = SelectPairs(views, Eigen::AlignedBox2d(), PairOptions{}).IndexPairs();
     for (const auto& p : plan.pairs)  // planned inside a shrunk window: a subset
       EXPECT_NE(std::find(pairs.begin(), pairs.end(), p), pairs.end()) << preset;
     std::vector<int> count(views.size(), 0);
