@@ -75,6 +75,7 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "alternate_directions") r->alternate_directions = Boolean(v, path);
     else if (key == "restart_from_initial") r->restart_from_initial = Boolean(v, path);
     else if (key == "normalize_by_pair_count") r->normalize_by_pair_count = Boolean(v, path);
+    else if (key == "min_height_confidence") r->min_height_confidence = Number(v, path);
     else if (key == "hold_boundary_xy") r->hold_boundary_xy = Boolean(v, path);
     else if (key == "estimate_bias") r->estimate_bias = Boolean(v, path);
     else if (key == "min_pair_angle_deg") r->pairs.min_angle_deg = Number(v, path);

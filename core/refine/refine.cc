@@ -46,6 +46,24 @@ double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
+// Height information of a pair: (B/H)², B/H = 2 tan(angle / 2) (the inverse variance of a
+// height from one pixel of disparity, in units of GSD⁻²).
+double PairHeightInformation(double angle_deg) {
+  const double b_h = 2 * std::tan(0.5 * angle_deg * M_PI / 180);
+  return b_h * b_h;
+}
+
+// How much the pairs that see a vertex constrain its height, in [min_height_confidence, 1]:
+// their height information relative to one pair at the optimal angle. The thin-plate
+// weight is divided by it, so that where the images constrain the surface weakly (one
+// narrow pair, occlusion), the surface stays smooth and near where it started rather
+// than following matching noise.
+double HeightConfidence(double information, const RefineOptions& options) {
+  if (!(options.min_height_confidence < 1)) return 1.0;
+  const double reference = PairHeightInformation(options.pairs.optimal_angle_deg);
+  return std::clamp(information / reference, options.min_height_confidence, 1.0);
+}
+
 void CheckInput(const RefineInput& input) {
   SATMESH_CHECK(input.views.size() >= 2, ErrorCode::kInvalidInput,
                 "refine: need at least 2 views, got " + std::to_string(input.views.size()));
@@ -63,6 +81,7 @@ struct LevelContext {
   const Progress& progress;
   const std::vector<PreparedView>& sources;
   std::vector<std::pair<int, int>>& pairs;
+  double mean_pair_information;  // mean over the pairs of PairHeightInformation
   double gsd_m;
 };
 
@@ -226,11 +245,14 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const double photo_scale = opt.step * opt.alpha * gsd * gsd;
     const double smooth_scale = opt.step * opt.beta;
     const double max_move = opt.max_step_gsd * gsd;
+    const double directions_per_pair = half ? 1.0 : 2.0;
 #pragma omp parallel for schedule(static)
     for (long v = 0; v < long(nv); ++v) {
       Eigen::Vector3d g = gradient[v];
       if (opt.normalize_by_pair_count && seen[v] > 1) g /= double(seen[v]);
-      Eigen::Vector3d move = -photo_scale * g - smooth_scale * u2[v].cast<double>();
+      const double confidence =
+          HeightConfidence(seen[v] / directions_per_pair * ctx.mean_pair_information, opt);
+      Eigen::Vector3d move = -photo_scale * g - smooth_scale / confidence * u2[v].cast<double>();
       if (opt.hold_boundary_xy && adjacency.is_boundary[v]) move.x() = move.y() = 0;
       const double len = move.norm();
       if (len > max_move) move *= max_move / len;
@@ -322,7 +344,11 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   RefineResult* result) {
   TriangleMesh mesh =
       RemeshForLevel(input.initial_mesh, options, result->gsd_m, options.levels, progress);
-  const LevelContext ctx{input, options, progress, views, result->pairs, result->gsd_m};
+  double information = 0;
+  for (const StereoPair& p : result->pair_details) information += PairHeightInformation(p.angle_deg);
+  information /= double(std::max<size_t>(1, result->pair_details.size()));
+  const LevelContext ctx{input,         options,     progress, views, result->pairs,
+                         information, result->gsd_m};
   bool check_initial = options.restart_from_initial;
   for (int level = options.levels; level >= 0; --level) {
     const auto level_start = Clock::now();

@@ -54,6 +54,11 @@ struct RefineOptions {
                                      // false: both directions every iteration (the paper)
   bool normalize_by_pair_count = true;  // divide each vertex's photometric gradient by the
                                         // number of pair-directions that saw it (OpenMVS)
+  double min_height_confidence = 0.1;  // floor of a vertex's height confidence: the height
+                                       // information (B/H)² of the pairs that see it over
+                                       // that of one pair at pairs.optimal_angle_deg; the
+                                       // thin-plate weight is divided by it (refine.cc,
+                                       // HeightConfidence). 1: off (uniform beta), (0, 1]
   bool hold_boundary_xy = true;    // boundary vertices move vertically only (tile seams)
   bool estimate_bias = true;       // per-view RPC bias shift estimated over the initial surface
                                    // before refining (core/refine/bias_estimation.h; Pléiades:
