@@ -70,7 +70,7 @@ std::string FormatIso8601Utc(double unix_s) {
   const unsigned d = doy - (153 * mp + 2) / 5 + 1;
   const unsigned m = mp < 10 ? mp + 3 : mp - 9;
   const long long y = (long long)yoe + era * 400 + (m <= 2);
-  char buf[48];
+  char buf[96];  // room for any year and the compiler's worst case
   std::snprintf(buf, sizeof(buf), "%04lld-%02u-%02uT%02lld:%02lld:%02lld.%06lldZ", y, m, d, sod / 3600,
                 sod / 60 % 60, sod % 60, micro);
   return buf;

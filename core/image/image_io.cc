@@ -59,8 +59,8 @@ RasterInfo ReadRasterInfo(const std::string& path) {
 AcquisitionInfo ReadAcquisitionInfo(const std::string& path) {
   DatasetPtr ds = OpenRaster(path);
   MetadataList items;
-  // Lowest precedence first is not needed: the parser keeps the first item per key, so the
-  // IMD domain goes first, then the default domain, then IMAGERY.
+  // The parser keeps the first item of a name (IMAGE_1 before other images): the IMD domain
+  // first, then the default domain, then IMAGERY.
   for (const char* domain : {"IMD", "", "IMAGERY"}) {
     CSLConstList md = ds->GetMetadata(domain);
     for (int k = 0; md && md[k]; ++k) {
