@@ -5,6 +5,7 @@
 
 #include "client/args.h"
 #include "client/command.h"
+#include "core/image/acquisition_info.h"
 #include "core/synth/scene_writer.h"
 
 namespace satmesh::cli {
@@ -15,17 +16,46 @@ int RunSynth(const std::vector<std::string>& argv) {
   if (args.Has("help")) {
     std::printf(
         "usage: satmesh synth --out DIR [--preset small|default|large] [--seed N]\n"
-        "                     [--views N] [--rpc-bias-px SIGMA] [--no-trees] [--no-preview]\n"
-        "Writes images/*.tif (UInt16, RPC), truth/, initial/dsm.tif, scene.json, job.json,\n"
-        "preview.png.\n");
+        "                     [--views stereo|tristereo|multidate|jax] [--num-views N]\n"
+        "                     [--gsd M] [--rpc-bias-px SIGMA] [--no-trees] [--no-preview]\n"
+        "Writes images/*.tif (UInt16, RPC, IMD acquisition metadata), truth/, initial/dsm.tif,\n"
+        "scene.json, job.json, preview.png.\n"
+        "  --preset P       scene size: small (72 m, for tests), default (300 m), large (750 m)\n"
+        "  --views C        the collection, as satellites acquire them (default: small tristereo,\n"
+        "                   default multidate, large jax):\n"
+        "                     stereo     2 views of one pass, along track, converging 15-35 deg,\n"
+        "                                across-track roll 0-15 deg, one sun\n"
+        "                     tristereo  3 views of one pass: fore / near-nadir / aft, each outer\n"
+        "                                view 6-15 deg from the middle one, one sun\n"
+        "                     multidate  6 passes on different dates: azimuth anywhere, off-nadir\n"
+        "                                5-35 deg, the sun of each date, ~1 px RPC bias per image\n"
+        "                     jax        multidate with 26 views (the JAX-like archive)\n"
+        "  --num-views N    number of passes of multidate/jax, [2, 64]\n"
+        "  --gsd M          ground sample distance and grid cell, m (e.g. 0.3, 0.5; default 0.3)\n"
+        "  --rpc-bias-px S  per-image RPC bias sigma, px (default: 1 for multidate/jax, 0 for one pass)\n");
     return kExitOk;
   }
   const std::string out = args.Require("out");
   const int seed = args.GetInt("seed", 1);
   SATMESH_CHECK(seed >= 0, ErrorCode::kInvalidArgument, "option --seed must be >= 0");
   synth::SynthOptions options = synth::SynthPreset(args.GetOr("preset", "small"), uint32_t(seed));
-  options.num_views = args.GetInt("views", options.num_views);
-  options.rpc_bias_sigma_px = args.GetDouble("rpc-bias-px", 0.0);
+  if (args.Has("views")) {
+    const std::string name = args.Require("views");
+    const auto acquisition = synth::ParseAcquisition(name);
+    SATMESH_CHECK(acquisition.has_value(), ErrorCode::kInvalidArgument,
+                  "option --views: unknown collection '" + name + "' (expected stereo, tristereo, multidate or jax)");
+    synth::SetAcquisition(&options, *acquisition);
+  }
+  if (args.Has("num-views")) {
+    const auto a = options.views.acquisition;
+    SATMESH_CHECK(a == synth::Acquisition::kMultiDate || a == synth::Acquisition::kJax,
+                  ErrorCode::kInvalidArgument,
+                  "option --num-views applies to multidate and jax (" + synth::AcquisitionName(a) +
+                      " has a fixed number of views)");
+    options.views.num_views = args.GetInt("num-views", options.views.num_views);
+  }
+  options.gsd_m = args.GetDouble("gsd", options.gsd_m);
+  options.rpc_bias_sigma_px = args.GetDouble("rpc-bias-px", options.rpc_bias_sigma_px);
   if (args.Has("no-trees")) options.city.trees = false;
   if (args.Has("no-preview")) options.write_preview = false;
   const std::string why = options.Check();
@@ -35,16 +65,21 @@ int RunSynth(const std::vector<std::string>& argv) {
     spdlog::debug("synth {:.0f}% {}", 100 * f, stage);
   };
   const synth::SynthResult r = synth::GenerateScene(out, options, progress);
-  std::printf("scene %s: preset %s seed %d, %d buildings, %zu faces, %zu views\n", out.c_str(),
-              options.preset.c_str(), seed, r.num_buildings, r.num_faces, r.views.size());
+  std::printf("scene %s: preset %s seed %d, %d buildings, %zu faces, %zu views (%s), gsd %g m\n",
+              out.c_str(), options.preset.c_str(), seed, r.num_buildings, r.num_faces, r.views.size(),
+              synth::AcquisitionName(options.views.acquisition).c_str(), options.gsd_m);
   for (const auto& v : r.views)
-    std::printf("  %s %dx%d off-nadir %.1f az %.1f gsd %.3f m  rpc fit max %.5f px  ray %.5f px\n",
-                v.image.c_str(), v.width, v.height, v.off_nadir_deg, v.azimuth_deg, v.gsd_m,
-                v.rpc_fit_max_half_step_px, v.ray_grid_error_px);
-  std::printf("pairs: %zu selected by the refinement's rule (window %g-%g deg, cap %d per image), "
-              "%d view pairs inside the window\n",
-              r.pairs.size(), options.min_pair_angle_deg, options.max_pair_angle_deg,
-              options.max_pairs_per_image, r.candidate_pairs);
+    std::printf("  %s %dx%d pass %d %s off-nadir %.1f az %.1f gsd %.3f m sun el %.1f az %.1f  "
+                "bias (%.2f, %.2f) px  rpc fit max %.5f px  ray %.5f px\n",
+                v.image.c_str(), v.width, v.height, v.pass, FormatIso8601Utc(v.acquisition_unix_s).substr(0, 19).c_str(),
+                v.off_nadir_deg, v.azimuth_deg, v.gsd_m, v.sun.elevation_deg, v.sun.azimuth_deg,
+                v.bias_col_row_px.x(), v.bias_col_row_px.y(), v.rpc_fit_max_half_step_px, v.ray_grid_error_px);
+  for (size_t i = 0; r.views.size() <= 6 && i < r.views.size(); ++i)  // convergence angles
+    for (size_t j = i + 1; j < r.views.size(); ++j)
+      std::printf("%s%zu-%zu %.1f", i + j == 1 ? "convergence (deg):" : ",", i, j,
+                  synth::ViewIntersectionAngleDeg({r.views[i].off_nadir_deg, r.views[i].azimuth_deg},
+                                                  {r.views[j].off_nadir_deg, r.views[j].azimuth_deg}));
+  if (r.views.size() <= 6) std::printf("\n");
   std::printf("initial DSM on roofs (%zu cells): NMAD %.3f m, p68 %.3f m, holes %.1f%%\n",
               r.num_roof_cells, r.initial_roof_nmad_m, r.initial_roof_p68_m,
               100 * r.initial_hole_fraction);

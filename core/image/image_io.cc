@@ -56,6 +56,23 @@ RasterInfo ReadRasterInfo(const std::string& path) {
   return info;
 }
 
+AcquisitionInfo ReadAcquisitionInfo(const std::string& path) {
+  DatasetPtr ds = OpenRaster(path);
+  MetadataList items;
+  // The parser keeps the first item of a name (IMAGE_1 before other images): the IMD domain
+  // first, then the default domain, then IMAGERY.
+  for (const char* domain : {"IMD", "", "IMAGERY"}) {
+    CSLConstList md = ds->GetMetadata(domain);
+    for (int k = 0; md && md[k]; ++k) {
+      char* key = nullptr;
+      const char* value = CPLParseNameValue(md[k], &key);
+      if (key && value) items.emplace_back(key, value);
+      CPLFree(key);
+    }
+  }
+  return AcquisitionInfoFromMetadata(items);
+}
+
 ImageF ReadImageWindow(const std::string& path, int band, const PixelWindow& window,
                        float fill) {
   const std::string where = path + " band " + std::to_string(band) + " " + WindowText(window);

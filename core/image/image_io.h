@@ -2,6 +2,7 @@
 // Windowed raster reads and writes through GDAL.
 #include <string>
 
+#include "core/image/acquisition_info.h"
 #include "core/image/image.h"
 
 namespace satmesh {
@@ -23,6 +24,13 @@ ImageF ReadImageWindow(const std::string& path, int band, const PixelWindow& win
                        float fill = 0.f);
 // Reads the whole band.
 ImageF ReadImage(const std::string& path, int band = 1);
+
+// Acquisition metadata of an image file from its "IMD" metadata domain (as GDAL exposes a
+// WorldView .IMD/.XML or Pléiades DIM beside the image, or as stored in the file; see
+// acquisition_info.h for the keys), the default domain's items of the same names as a
+// fallback, and "IMAGERY" ACQUISITIONDATETIME for the time. Absent keys stay unset.
+// Throws Error{kNotFound}/{kIo} naming the file.
+AcquisitionInfo ReadAcquisitionInfo(const std::string& path);
 
 // Writes an 8-bit PNG of the image, mapped linearly from [lo, hi] (for previews).
 void WritePng(const std::string& path, const ImageF& image, float lo, float hi);

@@ -65,7 +65,8 @@ cv::Mat ToTile(const std::vector<float>& px, int w, int h, float lo, float hi, i
 
 }  // namespace
 
-void WriteImageWithRpc(const std::string& path, const ImageF& dn, const RpcModel& rpc) {
+void WriteImageWithRpc(const std::string& path, const ImageF& dn, const RpcModel& rpc,
+                       const AcquisitionInfo& acquisition) {
   GDALDatasetH ds = CreateTif(path, dn.width, dn.height, GDT_UInt16);
   std::vector<uint16_t> px(dn.pixels.size());
   for (size_t k = 0; k < px.size(); ++k)
@@ -76,6 +77,10 @@ void WriteImageWithRpc(const std::string& path, const ImageF& dn, const RpcModel
   for (const auto& [k, v] : rpc.ToKeyValues()) md = CSLSetNameValue(md, k.c_str(), v.c_str());
   if (err == CE_None) err = GDALSetMetadata(ds, md, "RPC");
   CSLDestroy(md);
+  char** imd = nullptr;
+  for (const auto& [k, v] : ImdMetadata(acquisition)) imd = CSLSetNameValue(imd, k.c_str(), v.c_str());
+  if (err == CE_None && imd) err = GDALSetMetadata(ds, imd, "IMD");
+  CSLDestroy(imd);
   GDALClose(ds);
   SATMESH_CHECK(err == CE_None, ErrorCode::kIo, "cannot write " + path);
 }
@@ -113,13 +118,16 @@ void WriteSceneJson(const std::string& path, const SynthOptions& o, const SynthR
     << o.crs << "\",\n  \"gsd_m\": " << Num(o.gsd_m) << ",\n  \"aoi\": {\"xmin\": " << Num(r.aoi_xmin)
     << ", \"ymin\": " << Num(r.aoi_ymin) << ", \"xmax\": " << Num(r.aoi_xmax)
     << ", \"ymax\": " << Num(r.aoi_ymax) << "},\n  \"height_range_m\": [" << Num(r.height_min_m)
-    << ", " << Num(r.height_max_m) << "],\n  \"sun\": {\"azimuth_deg\": " << Num(r.sun.azimuth_deg)
-    << ", \"elevation_deg\": " << Num(r.sun.elevation_deg) << "},\n  \"views\": [\n";
+    << ", " << Num(r.height_max_m) << "],\n  \"acquisition\": \"" << AcquisitionName(o.views.acquisition)
+    << "\",\n  \"rpc_bias_sigma_px\": " << Num(o.rpc_bias_sigma_px) << ",\n  \"views\": [\n";
   for (size_t i = 0; i < r.views.size(); ++i) {
     const SynthView& v = r.views[i];
     s << "    {\"image\": \"" << v.image << "\", \"off_nadir_deg\": " << Num(v.off_nadir_deg)
       << ", \"azimuth_deg\": " << Num(v.azimuth_deg) << ", \"zenith_deg\": " << Num(v.zenith_deg)
-      << ", \"gsd_m\": " << Num(v.gsd_m) << ", \"width\": " << v.width << ", \"height\": " << v.height
+      << ", \"gsd_m\": " << Num(v.gsd_m) << ", \"pass\": " << v.pass << ", \"track_heading_deg\": "
+      << Num(v.track_heading_deg) << ", \"acquisition_time\": \"" << FormatIso8601Utc(v.acquisition_unix_s)
+      << "\", \"acquisition_unix_s\": " << Num(v.acquisition_unix_s) << ", \"sun\": {\"azimuth_deg\": "
+      << Num(v.sun.azimuth_deg) << ", \"elevation_deg\": " << Num(v.sun.elevation_deg) << "}, \"width\": " << v.width << ", \"height\": " << v.height
       << ", \"rpc_fit_max_px\": " << Num(v.rpc_fit_max_half_step_px)
       << ", \"ray_grid_error_px\": " << Num(v.ray_grid_error_px) << ", \"bias_col_row_px\": ["
       << Num(v.bias_col_row_px.x()) << ", " << Num(v.bias_col_row_px.y()) << "], \"gain\": "

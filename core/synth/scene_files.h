@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/dsm/dsm.h"
+#include "core/image/acquisition_info.h"
 #include "core/image/image.h"
 #include "core/rpc/rpc_model.h"
 #include "core/synth/scene_writer.h"
@@ -14,8 +15,10 @@
 namespace satmesh::synth {
 
 // UInt16 GeoTIFF (values rounded and clamped to [0, 65535]) with the RPC in the "RPC"
-// metadata domain.
-void WriteImageWithRpc(const std::string& path, const ImageF& dn, const RpcModel& rpc);
+// metadata domain and the acquisition in the "IMD" domain as GDAL exposes a WorldView IMD
+// (ImdMetadata; GTiff keeps it in its GDAL_METADATA tag).
+void WriteImageWithRpc(const std::string& path, const ImageF& dn, const RpcModel& rpc,
+                       const AcquisitionInfo& acquisition = {});
 // Byte GeoTIFF on the grid of `grid` (its z is ignored).
 void WriteMaskTif(const std::string& path, const Dsm& grid, const std::vector<uint8_t>& mask);
 // Binary PLY: x, y, z double, nx, ny, nz float.

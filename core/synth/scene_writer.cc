@@ -33,22 +33,12 @@ class Stopwatch {
 
 std::string SynthOptions::Check() const {
   if (!(gsd_m > 0)) return "gsd_m must be > 0";
-  if (num_views < 2 || num_views > 64) return "num_views must be in [2, 64]";
-  if (!(min_off_nadir_deg >= 0 && max_off_nadir_deg <= 45 && min_off_nadir_deg < max_off_nadir_deg))
-    return "need 0 <= min_off_nadir_deg < max_off_nadir_deg <= 45";
-  if (!(min_pair_angle_deg > 0 && min_pair_angle_deg < max_pair_angle_deg))
-    return "need 0 < min_pair_angle_deg < max_pair_angle_deg";
-  if (min_partners < 1) return "min_partners must be >= 1";
-  if (!(azimuth_spread_deg > 0 && azimuth_spread_deg <= 360)) return "azimuth_spread_deg must be in (0, 360]";
-  if (max_pairs_per_image < 1) return "max_pairs_per_image must be >= 1";
-  if (target_pairs < 0) return "target_pairs must be >= 0";
-  if (!(off_nadir_stratum_width >= 0)) return "off_nadir_stratum_width must be >= 0";
   if (margin_px < 0) return "margin_px must be >= 0";
   if (!(gain_spread >= 0 && gain_spread <= 0.9)) return "gain_spread must be in [0, 0.9]";
   if (!(rpc_bias_sigma_px >= 0)) return "rpc_bias_sigma_px must be >= 0";
   if (!(roof_edge_band_m >= 0)) return "roof_edge_band_m must be >= 0";
   if (!(facade_point_spacing_m > 0)) return "facade_point_spacing_m must be > 0";
-  for (const std::string& s : {city.Check(), render.Check(), sensor.Check(), rpc_fit.Check(),
+  for (const std::string& s : {views.Check(), city.Check(), render.Check(), sensor.Check(), rpc_fit.Check(),
                                initial.Check()})
     if (!s.empty()) return s;
   return "";
@@ -63,21 +53,14 @@ SynthOptions SynthPreset(const std::string& name, uint32_t seed) {
     o.city.building_margin_m = 15;
     o.city.ground_margin_m = 70;
     o.city.street_pitch_m = 56;
-    o.num_views = 4;
-    o.min_partners = 2;
-    o.azimuth_spread_deg = 90;  // 4 views over 360 deg pair only near nadir
-    o.off_nadir_stratum_width = 3;
+    SetAcquisition(&o, Acquisition::kTriStereo);
   } else if (name == "default") {
     o.city.aoi_size_m = 300;
-    o.num_views = 10;
-    o.azimuth_spread_deg = 180;  // 10 views: half circle (full circle: no partners off nadir)
+    SetAcquisition(&o, Acquisition::kMultiDate);
   } else if (name == "large") {
     o.city.aoi_size_m = 750;
     o.city.street_pitch_m = 90;
-    o.num_views = 26;  // JAX-like: azimuths around the circle, off-nadir 5-35 deg
-    o.min_partners = 2;
-    o.target_pairs = 45;
-    o.off_nadir_stratum_width = 3;
+    SetAcquisition(&o, Acquisition::kJax);
   } else {
     ThrowError(ErrorCode::kInvalidArgument,
                "unknown preset '" + name + "' (expected small, default or large)");
@@ -85,17 +68,14 @@ SynthOptions SynthPreset(const std::string& name, uint32_t seed) {
   return o;
 }
 
+void SetAcquisition(SynthOptions* o, Acquisition acquisition) {
+  o->views = ForAcquisition(acquisition);
+  const bool one_pass = acquisition == Acquisition::kStereo || acquisition == Acquisition::kTriStereo;
+  o->rpc_bias_sigma_px = one_pass ? 0 : 1;
+}
+
 ViewPlan PlanViews(const SynthOptions& o, uint64_t seed) {
-  ViewPlanOptions p;
-  p.num_views = o.num_views;
-  p.min_off_nadir_deg = o.min_off_nadir_deg, p.max_off_nadir_deg = o.max_off_nadir_deg;
-  p.azimuth_spread_deg = o.azimuth_spread_deg;
-  p.off_nadir_stratum_width = o.off_nadir_stratum_width;
-  p.min_pair_angle_deg = o.min_pair_angle_deg, p.max_pair_angle_deg = o.max_pair_angle_deg;
-  p.max_pairs_per_image = o.max_pairs_per_image;
-  p.min_partners = o.min_partners;
-  p.target_pairs = o.target_pairs;
-  return PlanViewSet(p, seed);
+  return PlanViewSet(o.views, o.center_lon_lat, seed);
 }
 
 SynthResult GenerateScene(const std::string& out_dir, const SynthOptions& o, const Progress& progress) {
@@ -161,12 +141,10 @@ SynthResult GenerateScene(const std::string& out_dir, const SynthOptions& o, con
   res.initial_hole_fraction = double(holes) / initial.z.size();
   res.timings_s.emplace_back("initial", lap.Lap());
 
-  // 4. Views: exact pushbroom camera, rendering, sensor, RPC fit, GeoTIFF.
-  res.sun.azimuth_deg = 110 + 60 * u(gen);
-  res.sun.elevation_deg = 50 + 18 * u(gen);
-  const std::vector<Eigen::Vector2d>& plan = view_plan.off_nadir_azimuth_deg;
-  res.pairs = view_plan.pairs;
-  res.candidate_pairs = view_plan.candidate_pairs;
+  // 4. Views: exact pushbroom camera, rendering under the view's sun, sensor, RPC fit,
+  //    GeoTIFF with the acquisition metadata.
+  const std::vector<PlannedView>& plan = view_plan.views;
+  const int num_views = int(plan.size());
   std::vector<Eigen::Vector3d> cover;
   for (double x : {res.aoi_xmin, res.aoi_xmax})
     for (double y : {res.aoi_ymin, res.aoi_ymax})
@@ -191,15 +169,20 @@ SynthResult GenerateScene(const std::string& out_dir, const SynthOptions& o, con
   std::vector<ImageF> previews;
   std::vector<std::string> labels;
   double t_render = 0, t_fit = 0, t_write = 0;
-  for (int v = 0; v < o.num_views; ++v) {
+  for (int v = 0; v < num_views; ++v) {
     progress.ThrowIfCancelled();
-    progress.Report(0.1 + 0.85 * v / o.num_views, "view " + std::to_string(v));
+    progress.Report(0.1 + 0.85 * v / num_views, "view " + std::to_string(v));
     SynthView view;
     ViewGeometrySetup setup;
     setup.center_lon_lat_h = centre;
-    setup.off_nadir_deg = plan[v].x();
-    setup.azimuth_deg = plan[v].y();
-    setup.track_heading_deg = (u(gen) < 0.5 ? 190 : 350) + 10 * (u(gen) - 0.5);
+    setup.off_nadir_deg = plan[v].off_nadir_azimuth_deg.x();
+    setup.azimuth_deg = plan[v].off_nadir_azimuth_deg.y();
+    setup.track_heading_deg = plan[v].track_heading_deg;
+    view.pass = plan[v].pass;
+    view.track_heading_deg = plan[v].track_heading_deg;
+    view.acquisition_unix_s = plan[v].acquisition_unix_s;
+    view.sun.elevation_deg = plan[v].sun_elevation_deg;
+    view.sun.azimuth_deg = plan[v].sun_azimuth_deg;
     setup.gsd_m = o.gsd_m;
     setup.margin_px = o.margin_px;
     view.camera = PushbroomCamera::LookingAt(setup, cover);
@@ -211,7 +194,7 @@ SynthResult GenerateScene(const std::string& out_dir, const SynthOptions& o, con
     const ViewRayGrid rays(view.camera, o.crs, origin, ray_opts);
     view.ray_grid_error_px = RayGridErrorPx(view.camera, rays, o.crs, origin,
                                             {res.height_min_m, centre.z(), res.height_max_m}, 7);
-    const ImageF radiance = RenderView(scene, rays, view.width, view.height, res.sun, o.render, &progress);
+    const ImageF radiance = RenderView(scene, rays, view.width, view.height, view.sun, o.render, &progress);
     SensorOptions sensor = o.sensor;
     view.gain = sensor.gain *= 1 + o.gain_spread * (2 * u(gen) - 1);
     view.offset_dn = sensor.offset_dn *= 0.5 + u(gen);
@@ -235,14 +218,23 @@ SynthResult GenerateScene(const std::string& out_dir, const SynthOptions& o, con
     char name[32];
     std::snprintf(name, sizeof(name), "images/img_%02d.tif", v);
     view.image = name;
-    WriteImageWithRpc((dir / view.image).string(), dn, RpcModel::FromCoefficients(coeffs));
+    AcquisitionInfo acquisition;
+    acquisition.sun_elevation_deg = view.sun.elevation_deg;
+    acquisition.sun_azimuth_deg = view.sun.azimuth_deg;
+    acquisition.satellite_elevation_deg = 90 - view.zenith_deg;
+    acquisition.satellite_azimuth_deg = view.azimuth_deg;
+    acquisition.off_nadir_deg = view.off_nadir_deg;
+    acquisition.acquisition_unix_s = view.acquisition_unix_s;
+    WriteImageWithRpc((dir / view.image).string(), dn, RpcModel::FromCoefficients(coeffs), acquisition);
     previews.push_back(dn);
     labels.push_back(std::string(name + 7) + " on " + std::to_string(int(std::round(view.off_nadir_deg))) +
                      " az " + std::to_string(int(std::round(view.azimuth_deg))));
     t_write += lap.Lap();
-    spdlog::info("synth: view {} {}x{} off-nadir {:.1f} az {:.1f} gsd {:.3f} rpc fit {:.5f} px ray {:.5f} px",
+    spdlog::info("synth: view {} {}x{} off-nadir {:.1f} az {:.1f} gsd {:.3f} sun el {:.1f} az {:.1f} "
+                 "rpc fit {:.5f} px ray {:.5f} px",
                  v, view.width, view.height, view.off_nadir_deg, view.azimuth_deg, view.gsd_m,
-                 view.rpc_fit_max_half_step_px, view.ray_grid_error_px);
+                 view.sun.elevation_deg, view.sun.azimuth_deg, view.rpc_fit_max_half_step_px,
+                 view.ray_grid_error_px);
     res.views.push_back(std::move(view));
   }
   res.timings_s.emplace_back("render", t_render);

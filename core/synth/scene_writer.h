@@ -27,19 +27,13 @@ struct SynthOptions {
   double base_height_m = -24;          // ellipsoidal height of the mean ground
   double gsd_m = 0.3;                  // grid cell and sensor pixel size, m, > 0
   CityOptions city;                    // aoi_size_m sets the AOI
-  int num_views = 10;                  // [2, 64]
-  double min_off_nadir_deg = 5, max_off_nadir_deg = 35;    // view sampling range
-  double min_pair_angle_deg = 5, max_pair_angle_deg = 13;  // stereo partners' angle range
-  int min_partners = 2;                // selected pairs per view, >= 1 (capped by num_views - 1)
-  double azimuth_spread_deg = 360;     // view azimuths stratified over this sector, (0, 360]
-  double off_nadir_stratum_width = 2;  // off-nadir strata width (view_plan.h), >= 0; 0: free
-  int max_pairs_per_image = 4;         // the refinement's pair cap (PairOptions), >= 1
-  int target_pairs = 0;                // plan at least this many selected pairs in all, >= 0
+  ViewPlanOptions views = ForAcquisition(Acquisition::kMultiDate);  // the collection drawn
   int margin_px = 16;                  // image margin around the AOI footprint, >= 0
   RenderOptions render;
   SensorOptions sensor;                // gain/offset are varied per image around these
   double gain_spread = 0.15;           // per-image gain in [1-s, 1+s], [0, 0.9]
-  double rpc_bias_sigma_px = 0;        // per-image RPC bias (written, recorded), px, >= 0
+  double rpc_bias_sigma_px = 1;        // per-image RPC bias (written, recorded), px, >= 0;
+                                       // vendor RPCs of different passes disagree by ~1 px
   RpcFitOptions rpc_fit;
   DegradeOptions initial;              // initial DSM degradation
   double roof_edge_band_m = 1.0;       // roof mask: removed band at roof edges/steps, m, >= 0
@@ -48,13 +42,23 @@ struct SynthOptions {
   std::string Check() const;
 };
 
-// small (~72 m, 4 views; seconds, for tests), default (~300 m, 10 views), large
-// (750 m, 26 views, benchmarks). Throws Error{kInvalidArgument} for another name.
+// Scene sizes: small (~72 m; seconds, for tests), default (300 m), large (750 m,
+// benchmarks), each with its default collection: small tristereo, default multidate, large
+// jax (SetAcquisition). Throws Error{kInvalidArgument} for another name.
 SynthOptions SynthPreset(const std::string& name, uint32_t seed = 1);
+
+// Sets the collection with its defaults (ForAcquisition) and the RPC bias that goes with
+// it: ~1 px per image for multi-date sets (vendor RPCs of different passes), none within
+// one pass (stereo, tristereo: one attitude solution).
+void SetAcquisition(SynthOptions* options, Acquisition acquisition);
 
 struct SynthView {
   std::string image;                // relative to the scene directory
-  double off_nadir_deg = 0, azimuth_deg = 0, zenith_deg = 0, gsd_m = 0;
+  double off_nadir_deg = 0, azimuth_deg = 0, zenith_deg = 0, gsd_m = 0;  // measured on the camera
+  int pass = 0;                     // views of one pass share date and sun
+  double track_heading_deg = 0;     // ground track, clockwise from N
+  double acquisition_unix_s = 0;    // first line time, UTC (also in the image's IMD metadata)
+  SunLight sun;                     // the sun of the view's date and time
   double rpc_fit_rms_px = 0, rpc_fit_max_px = 0, rpc_fit_max_half_step_px = 0;
   double ray_grid_error_px = 0;     // straight-line ray model vs exact camera
   Eigen::Vector2d bias_col_row_px{0, 0};
@@ -67,10 +71,7 @@ struct SynthResult {
   std::string out_dir;
   double aoi_xmin = 0, aoi_ymin = 0, aoi_xmax = 0, aoi_ymax = 0;  // scene CRS
   double height_min_m = 0, height_max_m = 0;                      // ellipsoidal
-  SunLight sun;
   std::vector<SynthView> views;
-  std::vector<std::pair<int, int>> pairs;  // what the refinement's SelectPairs picks (planned)
-  int candidate_pairs = 0;                 // view pairs inside the pair window
   int num_buildings = 0;
   size_t num_faces = 0, num_facade_points = 0, num_roof_cells = 0;
   double initial_roof_nmad_m = 0, initial_roof_p68_m = 0;  // initial DSM vs truth on the mask
@@ -83,8 +84,7 @@ struct SynthResult {
 SynthResult GenerateScene(const std::string& out_dir, const SynthOptions& options,
                           const Progress& progress = {});
 
-// The options' view plan (view_plan.h): azimuths spread over azimuth_spread_deg, every
-// view with min_partners pairs selected by the refinement's rule. Deterministic in seed.
+// The options' view plan (view_plan.h) at the scene centre. Deterministic in seed.
 ViewPlan PlanViews(const SynthOptions& options, uint64_t seed);
 
 }  // namespace satmesh::synth

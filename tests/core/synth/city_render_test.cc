@@ -1,4 +1,4 @@
-// City geometry, textures, rendering, initial DSM degradation, view planning.
+// City geometry, textures, rendering, initial DSM degradation, presets (view plans: view_plan_test.cc).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -6,7 +6,6 @@
 #include <map>
 
 #include "core/mesh/mesh.h"
-#include "core/refine/pairs.h"
 #include "core/synth/city.h"
 #include "core/synth/initial_dsm.h"
 #include "core/synth/render.h"
@@ -133,66 +132,34 @@ TEST(DegradeDsm, RoofErrorsLikeStereo) {
   EXPECT_GT(std::isfinite(initial.at(58, 150)) ? initial.at(58, 150) : 20.f, 5.f);
 }
 
-// Every preset's plan: off-nadir in range, azimuths spread, and the refinement's own pair
-// selection (default PairOptions) gives every view at least min_partners pairs.
-TEST(PlanViews, EveryViewHasStereoPartnersUnderTheRefinementsSelection) {
-  for (const char* preset : {"small", "default", "large"}) {
-    const SynthOptions o = SynthPreset(preset, 5);
-    const ViewPlan plan = PlanViews(o, 5);
-    ASSERT_EQ(int(plan.off_nadir_azimuth_deg.size()), o.num_views) << preset;
-    std::vector<PairCandidateView> views;
-    std::vector<double> azimuths;
-    for (const auto& d : plan.off_nadir_azimuth_deg) {
-      EXPECT_GE(d.x(), o.min_off_nadir_deg - 1e-9) << preset;
-      EXPECT_LE(d.x(), o.max_off_nadir_deg + 1e-9) << preset;
-      views.push_back({-SatelliteDirection(d), 1.0});  // towards the ground, as the refinement
-      azimuths.push_back(d.y());
-    }
-    const auto pairs = SelectPairs(views, Eigen::AlignedBox2d(), PairOptions{}).IndexPairs();
-    for (const auto& p : plan.pairs)  // planned inside a shrunk window: a subset
-      EXPECT_NE(std::find(pairs.begin(), pairs.end(), p), pairs.end()) << preset;
-    std::vector<int> count(views.size(), 0);
-    for (const auto& [i, j] : pairs) ++count[i], ++count[j];
-    for (int c : count) EXPECT_GE(c, o.min_partners) << preset;
-    EXPECT_GE(int(pairs.size()), o.target_pairs) << preset;
-    // Largest gap between neighbouring azimuths: strata of spread/N with jitter.
-    std::sort(azimuths.begin(), azimuths.end());
-    double gap = 360 - azimuths.back() + azimuths.front();
-    for (size_t k = 1; k < azimuths.size(); ++k) gap = std::max(gap, azimuths[k] - azimuths[k - 1]);
-    EXPECT_LE(gap, 360 - o.azimuth_spread_deg + 1.8 * o.azimuth_spread_deg / o.num_views) << preset;
-  }
-}
-
-TEST(PlanViews, LargePresetSpreadsAroundTheCircleAndOverOffNadir) {
-  const SynthOptions o = SynthPreset("large", 1);
-  const ViewPlan plan = PlanViews(o, 1);
-  double lo = 90, hi = 0;
-  int quadrant[4] = {};
-  for (const auto& d : plan.off_nadir_azimuth_deg) {
-    lo = std::min(lo, d.x()), hi = std::max(hi, d.x());
-    ++quadrant[int(d.y() / 90) % 4];
-  }
-  EXPECT_LT(lo, 10);
-  EXPECT_GT(hi, 28);
-  for (int q : quadrant) EXPECT_GE(q, 5);
-  EXPECT_GE(plan.candidate_pairs, int(plan.pairs.size()));
-}
-
-TEST(PlanViewSet, ImpossibleConstraintsThrow) {
-  ViewPlanOptions o;
-  o.num_views = 4;
-  o.min_off_nadir_deg = 28;  // four oblique views around the circle: no pair under 13 deg
-  o.iterations = 200;
-  EXPECT_THROW(PlanViewSet(o, 1), Error);
-  EXPECT_EQ(ViewPlanOptions{}.Check(), "");
-  o.azimuth_spread_deg = 0;
-  EXPECT_NE(o.Check(), "");
-}
-
 TEST(SynthPreset, UnknownNameThrows) {
   EXPECT_THROW(SynthPreset("huge"), Error);
   EXPECT_EQ(SynthPreset("small").Check(), "");
   EXPECT_EQ(SynthPreset("large").Check(), "");
+}
+
+// Presets are scene sizes, each with its default collection; multi-date ones carry
+// vendor-like RPC biases, one-pass ones none.
+TEST(SynthPreset, DefaultCollections) {
+  const SynthOptions small = SynthPreset("small"), def = SynthPreset("default"), large = SynthPreset("large");
+  EXPECT_EQ(small.views.acquisition, Acquisition::kTriStereo);
+  EXPECT_EQ(small.views.num_views, 3);
+  EXPECT_EQ(small.rpc_bias_sigma_px, 0);
+  EXPECT_EQ(def.views.acquisition, Acquisition::kMultiDate);
+  EXPECT_EQ(def.views.num_views, 6);
+  EXPECT_EQ(def.rpc_bias_sigma_px, 1);
+  EXPECT_EQ(large.views.acquisition, Acquisition::kJax);
+  EXPECT_EQ(large.views.num_views, 26);
+  EXPECT_EQ(large.rpc_bias_sigma_px, 1);
+  EXPECT_DOUBLE_EQ(small.city.aoi_size_m, 72);
+  EXPECT_DOUBLE_EQ(def.city.aoi_size_m, 300);
+  EXPECT_DOUBLE_EQ(large.city.aoi_size_m, 750);
+  SynthOptions o = SynthPreset("default");
+  SetAcquisition(&o, Acquisition::kStereo);
+  EXPECT_EQ(o.views.num_views, 2);
+  EXPECT_EQ(o.rpc_bias_sigma_px, 0);
+  o.views.num_views = 4;  // a stereo pair has two views
+  EXPECT_NE(o.Check(), "");
 }
 
 }  // namespace

@@ -30,7 +30,7 @@ class TiledJob : public ::testing::Test {
     o.city.ground_margin_m = 45;
     o.city.building_margin_m = 5;
     o.city.street_pitch_m = 40;
-    o.num_views = 3;
+    // The small preset's tri-stereo (3 views of one pass).
     o.render.supersample = 1;
     o.write_preview = false;
     // Per process: ctest runs each test of this suite as its own process, in parallel.
