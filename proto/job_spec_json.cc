@@ -65,6 +65,7 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "zncc_window_radius") r->zncc_window_radius = Integer(v, path);
     else if (key == "min_window_valid") r->min_window_valid = Number(v, path);
     else if (key == "variance_floor") r->variance_floor = Number(v, path);
+    else if (key == "noise_variance_factor") r->noise_variance_factor = Number(v, path);
     else if (key == "visibility_tolerance_gsd") r->visibility_tolerance_gsd = Number(v, path);
     else if (key == "min_ray_cos") r->min_ray_cos = Number(v, path);
     else if (key == "virtual_camera_grid_px") r->virtual_camera_grid_px = Integer(v, path);
@@ -76,6 +77,7 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "restart_from_initial") r->restart_from_initial = Boolean(v, path);
     else if (key == "normalize_by_pair_count") r->normalize_by_pair_count = Boolean(v, path);
     else if (key == "min_height_confidence") r->min_height_confidence = Number(v, path);
+    else if (key == "hold_unseen") r->hold_unseen = Boolean(v, path);
     else if (key == "hold_boundary_xy") r->hold_boundary_xy = Boolean(v, path);
     else if (key == "estimate_bias") r->estimate_bias = Boolean(v, path);
     else if (key == "min_pair_angle_deg") r->pairs.min_angle_deg = Number(v, path);

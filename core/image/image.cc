@@ -131,6 +131,17 @@ std::string RadiometryOptions::Check() const {
   return "";
 }
 
+double NoiseSigma(const ImageF& image) {
+  const int w = image.width, h = image.height;
+  if (w < 3 || h < 3) return 0.0;
+  const cv::Mat src(h, w, CV_32F, const_cast<float*>(image.pixels.data()));
+  const cv::Matx33f mask(1, -2, 1, -2, 4, -2, 1, -2, 1);
+  cv::Mat response;
+  cv::filter2D(src, response, CV_32F, mask);
+  const double sum = cv::norm(response(cv::Rect(1, 1, w - 2, h - 2)), cv::NORM_L1);
+  return std::sqrt(M_PI / 2) / 6.0 * sum / (double(w - 2) * (h - 2));
+}
+
 ImageF NormalizeRadiometry(const ImageF& image, const RadiometryOptions& options) {
   const std::string problem = options.Check();
   SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "RadiometryOptions: " + problem);

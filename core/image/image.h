@@ -45,6 +45,12 @@ struct RadiometryOptions {
 // are kept, not clipped): 11-16 bit images become comparable unit-range images.
 // Non-finite pixels are ignored for the percentiles. A constant image is only shifted.
 // Throws Error{kInvalidArgument} when options.Check() fails.
+// Standard deviation of the image's noise (Immerkær 1996, "Fast noise variance
+// estimation"): the mean absolute response to the Laplacian-difference mask
+// [1 -2 1; -2 4 -2; 1 -2 1], which cancels structure up to second order, times
+// sqrt(pi / 2) / 6. Texture adds a little; 0 for images under 3x3.
+double NoiseSigma(const ImageF& image);
+
 ImageF NormalizeRadiometry(const ImageF& image, const RadiometryOptions& options = {});
 
 }  // namespace satmesh

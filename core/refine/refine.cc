@@ -176,7 +176,8 @@ double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sour
   }
   std::vector<PassScratch> scratch;
   return PhotometricPass(views, slot, pairs, mesh, normals,
-                         PhotometricOptionsAt(options, level_gsd_m), &scratch, nullptr, nullptr);
+                         PhotometricOptionsAt(options, level_gsd_m, MeanNoiseVariance(sources, level)),
+                         &scratch, nullptr, nullptr);
 }
 
 // The iterations of one level. Returns false, before changing the mesh, if the mean ZNCC
@@ -194,7 +195,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   std::vector<int> slot;
   std::vector<ViewLevel> views = MakeViewLevels(ctx.input, ctx.sources, ctx.pairs, *mesh, level,
                                                 opt.virtual_camera_grid_px, &slot);
-  const PhotometricOptions photo = PhotometricOptionsAt(opt, gsd);
+  const PhotometricOptions photo =
+      PhotometricOptionsAt(opt, gsd, MeanNoiseVariance(ctx.sources, level));
 
   std::optional<RayScene> scene;  // Embree, unless the hit maps are rasterized
   if (!opt.rasterize_hit_maps) scene.emplace(*mesh);
@@ -248,6 +250,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const double directions_per_pair = half ? 1.0 : 2.0;
 #pragma omp parallel for schedule(static)
     for (long v = 0; v < long(nv); ++v) {
+      if (opt.hold_unseen && seen[v] == 0) continue;  // no image constrains it
       Eigen::Vector3d g = gradient[v];
       if (opt.normalize_by_pair_count && seen[v] > 1) g /= double(seen[v]);
       const double confidence =

@@ -9,6 +9,7 @@
 
 #include "core/common/progress.h"
 #include "core/geo/local_frame.h"
+#include "core/image/acquisition_info.h"
 #include "core/image/image.h"
 #include "core/mesh/mesh.h"
 #include "core/refine/pairs.h"
@@ -17,19 +18,11 @@
 
 namespace satmesh {
 
-// Acquisition metadata of an image (vendor metadata where the file has it), for pair
-// selection; NaN where unknown.
-struct ViewAcquisition {
-  double sun_elevation_deg = std::numeric_limits<double>::quiet_NaN();
-  double sun_azimuth_deg = std::numeric_limits<double>::quiet_NaN();
-  double time_s = std::numeric_limits<double>::quiet_NaN();  // unix seconds
-};
-
 struct RefineView {
   std::string name;
   ImageF image;  // full-resolution window, raw digital numbers
   RpcModel rpc;  // pixel coordinates relative to the window (RpcModel::Cropped)
-  ViewAcquisition acquisition;
+  AcquisitionInfo acquisition;  // sun and time, for pair selection (unset: unknown)
 };
 
 struct RefineInput {

@@ -39,6 +39,8 @@ std::string RefineOptions::Check() const {
   if (!(min_window_valid > 0 && min_window_valid <= 1))
     return "min_window_valid must be in (0, 1], got " + Num(min_window_valid);
   if (!(variance_floor > 0)) return "variance_floor must be > 0, got " + Num(variance_floor);
+  if (!(noise_variance_factor >= 0))
+    return "noise_variance_factor must be >= 0, got " + Num(noise_variance_factor);
   if (!(visibility_tolerance_gsd > 0))
     return "visibility_tolerance_gsd must be > 0, got " + Num(visibility_tolerance_gsd);
   if (!(min_ray_cos >= 0 && min_ray_cos < 1))

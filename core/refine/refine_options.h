@@ -31,6 +31,10 @@ struct RefineOptions {
   int zncc_window_radius = 2;      // ZNCC window (2r+1)², r in [1, 7]
   double min_window_valid = 0.5;   // min fraction of valid pixels in a ZNCC window, (0, 1]
   double variance_floor = 1e-4;    // floor of the windows' variances (unit-range images), > 0
+  double noise_variance_factor = 4.0;  // the floor is raised to this x the images' noise
+                                       // variance at the level (NoiseSigma, Immerkær): windows
+                                       // whose texture is not above the noise add little
+                                       // gradient (ZNCC confidence), >= 0; 0: fixed floor
   double visibility_tolerance_gsd = 2.0;  // depth test tolerance, in level GSD, > 0
   double min_ray_cos = 0.1;        // |cos| between ray and face normal below which a pixel is
                                    // ignored (grazing views), [0, 1)
@@ -59,6 +63,9 @@ struct RefineOptions {
                                        // that of one pair at pairs.optimal_angle_deg; the
                                        // thin-plate weight is divided by it (refine.cc,
                                        // HeightConfidence). 1: off (uniform beta), (0, 1]
+  bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
+                                   // (occluded, grazing, outside the images) do not move:
+                                   // the surface stays where the images say nothing
   bool hold_boundary_xy = true;    // boundary vertices move vertically only (tile seams)
   bool estimate_bias = true;       // per-view RPC bias shift estimated over the initial surface
                                    // before refining (core/refine/bias_estimation.h; Pléiades:

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/refine/view_level.h"
 #include "core/refine/virtual_camera.h"
@@ -49,12 +50,22 @@ std::vector<PreparedView> PrepareViews(const RefineInput& input, int levels) {
     p.pyramid = GaussianPyramid(NormalizeRadiometry(view.image), levels + 1);
     p.rpc = view.rpc;
     p.candidate = MakePairCandidate(view.rpc, input.frame, p.pyramid[0], input.min_z, input.max_z);
-    p.candidate.sun_elevation_deg = view.acquisition.sun_elevation_deg;
-    p.candidate.sun_azimuth_deg = view.acquisition.sun_azimuth_deg;
-    p.candidate.time_s = view.acquisition.time_s;
+    constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
+    p.candidate.sun_elevation_deg = view.acquisition.sun_elevation_deg.value_or(kUnknown);
+    p.candidate.sun_azimuth_deg = view.acquisition.sun_azimuth_deg.value_or(kUnknown);
+    p.candidate.time_s = view.acquisition.acquisition_unix_s.value_or(kUnknown);
     p.gsd_m = GroundSamplingDistance(view.rpc, input.frame);
+    for (const ImageF& image : p.pyramid) p.noise_variance.push_back(std::pow(NoiseSigma(image), 2));
   }
   return out;
+}
+
+double MeanNoiseVariance(const std::vector<PreparedView>& views, int level) {
+  double sum = 0;
+  int n = 0;
+  for (const auto& v : views)
+    if (level < int(v.noise_variance.size())) sum += v.noise_variance[level], ++n;
+  return n > 0 ? sum / n : 0.0;
 }
 
 PairSelection SelectViewPairs(const RefineInput& input, const std::vector<PreparedView>& views,
@@ -67,11 +78,12 @@ PairSelection SelectViewPairs(const RefineInput& input, const std::vector<Prepar
                      options);
 }
 
-PhotometricOptions PhotometricOptionsAt(const RefineOptions& opt, double gsd_m) {
+PhotometricOptions PhotometricOptionsAt(const RefineOptions& opt, double gsd_m,
+                                        double noise_variance) {
   PhotometricOptions photo;
   photo.zncc.window_radius = opt.zncc_window_radius;
   photo.zncc.min_valid_fraction = opt.min_window_valid;
-  photo.zncc.variance_floor = opt.variance_floor;
+  photo.zncc.variance_floor = std::max(opt.variance_floor, opt.noise_variance_factor * noise_variance);
   photo.visibility_tolerance_m = opt.visibility_tolerance_gsd * gsd_m;
   photo.min_ray_cos = opt.min_ray_cos;
   return photo;

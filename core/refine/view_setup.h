@@ -31,6 +31,7 @@ struct PreparedView {
   RpcModel rpc;
   PairCandidateView candidate;
   double gsd_m = 0;
+  std::vector<double> noise_variance;  // per pyramid level (NoiseSigma²)
 };
 
 // Radiometric normalisation, pyramids of levels + 1 images, candidates (acquisition
@@ -41,7 +42,13 @@ std::vector<PreparedView> PrepareViews(const RefineInput& input, int levels);
 PairSelection SelectViewPairs(const RefineInput& input, const std::vector<PreparedView>& views,
                               const PairOptions& options);
 
-// The photometric options of a level whose GSD is gsd_m.
-PhotometricOptions PhotometricOptionsAt(const RefineOptions& options, double gsd_m);
+// The photometric options of a level whose GSD is gsd_m and whose images' noise variance
+// is noise_variance (the ZNCC's variance floor: options.variance_floor, raised to
+// options.noise_variance_factor x the noise variance).
+PhotometricOptions PhotometricOptionsAt(const RefineOptions& options, double gsd_m,
+                                        double noise_variance = 0);
+
+// Mean noise variance of the views at `level`.
+double MeanNoiseVariance(const std::vector<PreparedView>& views, int level);
 
 }  // namespace satmesh

@@ -124,6 +124,7 @@ TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
     view.image = ReadImageWindow(image.path, 1, window);
     tile.image_bytes += double(window.width) * window.height * sizeof(float);
     view.rpc = rpc.Cropped(Eigen::Vector2d(window.col0, window.row0));
+    view.acquisition = ReadAcquisitionInfo(image.path);
     tile.refine.views.push_back(std::move(view));
     tile.view_names.push_back(image.path);
   }

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include <cmath>
 
 #include "core/common/error.h"
@@ -132,6 +134,27 @@ TEST(RadiometryOptions, InvalidPercentilesRejected) {
   options.high_percentile = 40;
   EXPECT_NE(options.Check().find("high_percentile"), std::string::npos);
   EXPECT_THROW(NormalizeRadiometry(ImageF(2, 2), options), Error);
+}
+
+}  // namespace
+}  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+TEST(NoiseSigma, RecoversTheNoiseOfASmoothImage) {
+  // A smooth ramp plus Gaussian noise of known sigma: the Laplacian-difference mask
+  // cancels the ramp, so the estimate is the noise.
+  std::mt19937 gen(7);
+  for (const double sigma : {0.005, 0.02}) {
+    std::normal_distribution<float> noise(0.f, float(sigma));
+    ImageF image(300, 200);
+    for (int r = 0; r < 200; ++r)
+      for (int c = 0; c < 300; ++c) image.at(c, r) = 0.3f + 0.001f * c + 0.0005f * r + noise(gen);
+    EXPECT_NEAR(NoiseSigma(image), sigma, 0.05 * sigma);
+  }
+  EXPECT_EQ(NoiseSigma(ImageF(2, 2, 1.f)), 0.0);
+  EXPECT_NEAR(NoiseSigma(ImageF(50, 50, 0.7f)), 0.0, 1e-9);
 }
 
 }  // namespace
