@@ -57,6 +57,7 @@ void ParseOptions(const json& o, RefineOptions* r) {
   for (const auto& [key, v] : o.items()) {
     const std::string path = "options." + key;
     if (key == "levels") r->levels = Integer(v, path);
+    else if (key == "max_coarse_edge_m") r->max_coarse_edge_m = Number(v, path);
     else if (key == "iterations_per_level") r->iterations_per_level = Integer(v, path);
     else if (key == "alpha") r->alpha = Number(v, path);
     else if (key == "beta") r->beta = Number(v, path);

@@ -138,8 +138,13 @@ double NoiseSigma(const ImageF& image) {
   const cv::Matx33f mask(1, -2, 1, -2, 4, -2, 1, -2, 1);
   cv::Mat response;
   cv::filter2D(src, response, CV_32F, mask);
-  const double sum = cv::norm(response(cv::Rect(1, 1, w - 2, h - 2)), cv::NORM_L1);
-  return std::sqrt(M_PI / 2) / 6.0 * sum / (double(w - 2) * (h - 2));
+  std::vector<float> magnitude;
+  magnitude.reserve(size_t(w - 2) * (h - 2));
+  for (int r = 1; r + 1 < h; ++r)
+    for (int c = 1; c + 1 < w; ++c) magnitude.push_back(std::abs(response.at<float>(r, c)));
+  auto median = magnitude.begin() + magnitude.size() / 2;
+  std::nth_element(magnitude.begin(), median, magnitude.end());
+  return *median / (0.6745 * 6.0);  // the mask's response to noise has std 6 sigma
 }
 
 ImageF NormalizeRadiometry(const ImageF& image, const RadiometryOptions& options) {

@@ -45,10 +45,11 @@ struct RadiometryOptions {
 // are kept, not clipped): 11-16 bit images become comparable unit-range images.
 // Non-finite pixels are ignored for the percentiles. A constant image is only shifted.
 // Throws Error{kInvalidArgument} when options.Check() fails.
-// Standard deviation of the image's noise (Immerkær 1996, "Fast noise variance
-// estimation"): the mean absolute response to the Laplacian-difference mask
-// [1 -2 1; -2 4 -2; 1 -2 1], which cancels structure up to second order, times
-// sqrt(pi / 2) / 6. Texture adds a little; 0 for images under 3x3.
+// Standard deviation of the image's noise (after Immerkær 1996, "Fast noise variance
+// estimation"): the response to the Laplacian-difference mask [1 -2 1; -2 4 -2; 1 -2 1]
+// cancels structure up to second order and has std 6 sigma on white noise; its median
+// absolute value / (0.6745 x 6), robust to the edges and texture of part of the image.
+// 0 for images under 3x3.
 double NoiseSigma(const ImageF& image);
 
 ImageF NormalizeRadiometry(const ImageF& image, const RadiometryOptions& options = {});

@@ -394,12 +394,6 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
   result->mesh = std::move(mesh);
 }
 
-double MeanGsd(const std::vector<PreparedView>& views) {
-  double sum = 0;
-  for (const auto& v : views) sum += v.gsd_m;
-  return sum / double(views.size());
-}
-
 }  // namespace
 
 double MeasureMeanZncc(const RefineInput& input, const TriangleMesh& mesh,
@@ -412,18 +406,27 @@ double MeasureMeanZncc(const RefineInput& input, const TriangleMesh& mesh,
   return LevelZncc(input, views, pairs, options, gsd, level, mesh, /*rasterize=*/false);
 }
 
-RefineResult Refine(const RefineInput& input, const RefineOptions& options,
+RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
                     const Progress& progress) {
-  const std::string problem = options.Check();
+  const std::string problem = user_options.Check();
   SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "refine options: " + problem);
   CheckInput(input);
   const auto start = Clock::now();
   RefineResult result;
 
-  // 1. Normalisation, pyramids (deep enough for the bias search too), pair candidates.
+  // 1. Levels from the GSD; normalisation, pyramids (deep enough for the bias search too),
+  //    pair candidates.
+  double gsd_sum = 0;
+  for (const auto& v : input.views) gsd_sum += GroundSamplingDistance(v.rpc, input.frame);
+  result.gsd_m = gsd_sum / double(input.views.size());
+  RefineOptions options = user_options;
+  options.levels = ResolveLevels(user_options, result.gsd_m, input.initial_cell_m);
+  if (user_options.levels < 0)
+    spdlog::info("refine: {} coarser level(s): GSD {:.2f} m, initial surface cell {:.2f} m, "
+                 "coarse edge {:.2f} m",
+                 options.levels, result.gsd_m, input.initial_cell_m, LevelEdge(options, result.gsd_m, options.levels));
   std::vector<PreparedView> views =
       PrepareViews(input, std::max(options.levels, options.estimate_bias ? BiasOptions().coarse_level : 0));
-  result.gsd_m = MeanGsd(views);
   progress.ThrowIfCancelled();
 
   // 2. Pairs.

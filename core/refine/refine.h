@@ -33,6 +33,7 @@ struct RefineInput {
   std::function<TriangleMesh(double edge_m)> initial_for_edge;
   LocalFrame frame;
   double min_z = 0, max_z = 0;  // height range (frame z) the surface stays within
+  double initial_cell_m = 0;    // resolution of the initial surface (DSM cell), 0: unknown
 };
 
 struct StageTimes {
@@ -64,7 +65,7 @@ struct RefineResult {
   // estimate_bias: shift added to each view's RPC (full-res px, col/row), and its time.
   std::vector<Eigen::Vector2d> view_bias_px;
   double bias_s = 0;
-  std::vector<LevelStats> levels;
+  std::vector<LevelStats> levels;      // coarse to fine (options.levels resolved: ResolveLevels)
   double gsd_m = 0;                    // full-resolution GSD
   double total_s = 0;
 };

@@ -1,5 +1,7 @@
 #include "core/refine/refine_options.h"
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 namespace satmesh {
@@ -27,7 +29,8 @@ std::string PairOptions::Check() const {
 }
 
 std::string RefineOptions::Check() const {
-  if (levels < 0 || levels > 6) return "levels must be in [0, 6], got " + Num(levels);
+  if (levels < -1 || levels > 6) return "levels must be in [0, 6] or -1 (auto), got " + Num(levels);
+  if (!(max_coarse_edge_m > 0)) return "max_coarse_edge_m must be > 0, got " + Num(max_coarse_edge_m);
   if (iterations_per_level < 0 || iterations_per_level > 1000)
     return "iterations_per_level must be in [0, 1000], got " + Num(iterations_per_level);
   if (!(alpha >= 0)) return "alpha must be >= 0, got " + Num(alpha);
@@ -53,6 +56,15 @@ std::string RefineOptions::Check() const {
     return "min_height_confidence must be in (0, 1], got " + Num(min_height_confidence);
   if (!(coarse_edge_px > 0)) return "coarse_edge_px must be > 0, got " + Num(coarse_edge_px);
   return pairs.Check();
+}
+
+int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cell_m) {
+  if (options.levels >= 0) return options.levels;
+  const double max_edge = std::max(options.max_coarse_edge_m, initial_cell_m);
+  int level = 0;
+  while (level < 3 && options.coarse_edge_px * gsd_m * std::ldexp(1.0, level + 1) <= max_edge + 1e-9)
+    ++level;
+  return level;
 }
 
 }  // namespace satmesh

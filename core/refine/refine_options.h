@@ -22,7 +22,12 @@ struct PairOptions {
 };
 
 struct RefineOptions {
-  int levels = 2;                  // coarsest pyramid level L (images at 1/2^L), [0, 6]
+  int levels = -1;                 // coarsest pyramid level L (images at 1/2^L), [0, 6];
+                                   // -1: from the GSD and the initial surface (ResolveLevels)
+  double max_coarse_edge_m = 2.0;  // levels -1: the coarse mesh's triangle edge stays under
+                                   // max(this, the initial surface's cell), so that a coarse
+                                   // start does not smooth away walls and structures of
+                                   // twice this size, > 0
   int iterations_per_level = 20;   // gradient steps per level, [0, 1000]
   double alpha = 2.0;              // weight of the photometric term M, >= 0
   double beta = 0.1;               // weight of the thin-plate term (homogenised by 1/GSD²), >= 0
@@ -74,5 +79,10 @@ struct RefineOptions {
 
   std::string Check() const;
 };
+
+// The coarsest level: options.levels, or for -1 the largest L in [0, 3] whose coarse
+// triangle edge (coarse_edge_px x gsd_m x 2^L) is at most max(max_coarse_edge_m,
+// initial_cell_m) (initial_cell_m <= 0: unknown). 0.3 m and 0.5 m images: L = 1.
+int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cell_m);
 
 }  // namespace satmesh

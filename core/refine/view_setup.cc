@@ -55,7 +55,12 @@ std::vector<PreparedView> PrepareViews(const RefineInput& input, int levels) {
     p.candidate.sun_azimuth_deg = view.acquisition.sun_azimuth_deg.value_or(kUnknown);
     p.candidate.time_s = view.acquisition.acquisition_unix_s.value_or(kUnknown);
     p.gsd_m = GroundSamplingDistance(view.rpc, input.frame);
-    for (const ImageF& image : p.pyramid) p.noise_variance.push_back(std::pow(NoiseSigma(image), 2));
+    // Measured at full resolution, where noise dominates the finest texture; a pyramid
+    // level averages ~4 pixels, dividing white noise's variance by ~4 (measuring the
+    // coarse levels themselves would take their texture for noise).
+    const double full_res = std::pow(NoiseSigma(p.pyramid[0]), 2);
+    for (size_t level = 0; level < p.pyramid.size(); ++level)
+      p.noise_variance.push_back(full_res * std::ldexp(1.0, -2 * int(level)));
   }
   return out;
 }

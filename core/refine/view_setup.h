@@ -31,7 +31,7 @@ struct PreparedView {
   RpcModel rpc;
   PairCandidateView candidate;
   double gsd_m = 0;
-  std::vector<double> noise_variance;  // per pyramid level (NoiseSigma²)
+  std::vector<double> noise_variance;  // per pyramid level: NoiseSigma² at full resolution / 4^level
 };
 
 // Radiometric normalisation, pyramids of levels + 1 images, candidates (acquisition

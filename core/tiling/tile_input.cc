@@ -109,7 +109,11 @@ TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
       for (double h : {h_min - 2, h_max + 2})
         box_geo.push_back(geo_from_dsm.Apply(Eigen::Vector3d(x0 + fx * (x1 - x0), y0 + fy * (y1 - y0), h)));
 
-  const int margin_px = 8 + 4 * (1 << spec.refine.levels);
+  const double cell_m = std::abs(dsm.geo_transform[1]);
+  tile.refine.initial_cell_m = cell_m;
+  // Window margin for the coarsest level's pixels (the GSD is not known yet: the DSM's cell
+  // stands in for it, as in CoarseCellSize).
+  const int margin_px = 8 + 4 * (1 << ResolveLevels(spec.refine, cell_m, cell_m));
   for (const auto& image : spec.images) {
     const RpcModel rpc = ReadRpc(image.path).WithBias(image.bias_col_row_px);
     const RasterInfo info = ReadRasterInfo(image.path);
@@ -131,7 +135,6 @@ TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
 
   // Initial mesh: the DSM at the coarse cell size, into the local frame; finer levels
   // that restart from the initial surface mesh it at half their triangle edge.
-  const double cell_m = std::abs(dsm.geo_transform[1]);
   const auto cell_factor = [cell_m](double size_m) {
     return std::max(1, int(std::floor(size_m / cell_m)));
   };
@@ -144,7 +147,8 @@ TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
 }
 
 double CoarseCellSize(const RefineOptions& options, double dsm_cell_m) {
-  return 0.5 * options.coarse_edge_px * dsm_cell_m * std::ldexp(1.0, options.levels);
+  return 0.5 * options.coarse_edge_px * dsm_cell_m *
+         std::ldexp(1.0, ResolveLevels(options, dsm_cell_m, dsm_cell_m));
 }
 
 TileInput PrepareTileInput(const JobSpec& spec, const JobPlan& plan, int tile_index) {
