@@ -122,6 +122,10 @@ int RunBench(const std::vector<std::string>& argv) {
       plan.tiles.size() == 1 ? PrepareTileInput(spec, plan, 0) : PrepareJobInput(spec);
   std::set<int> used;
   for (const auto& [i, j] : refine.pairs) used.insert(i), used.insert(j);
+  std::printf("pairs (%zu of %d candidates):", refine.pair_details.size(), refine.candidate_pairs);
+  for (const StereoPair& p : refine.pair_details)
+    std::printf(" %d-%d %.1f deg score %.2f;", p.i, p.j, p.angle_deg, p.score);
+  std::printf("\n");
   const RaycastTiming ray = TimeRaycast(input.refine, refine.mesh, {used.begin(), used.end()},
                                         /*level=*/0, spec.refine.virtual_camera_grid_px,
                                         args.GetInt("repeats", 3));
@@ -170,6 +174,10 @@ int RunBench(const std::vector<std::string>& argv) {
     }
     report["levels"] = levels;
     report["num_pairs"] = refine.pairs.size();
+    nlohmann::json pairs = nlohmann::json::array();
+    for (const StereoPair& p : refine.pair_details)
+      pairs.push_back({{"views", {p.i, p.j}}, {"angle_deg", p.angle_deg}, {"score", p.score}});
+    report["pairs"] = pairs;
     report["embree_alone"] = {{"level", finest.level}, {"num_rays", ray.num_rays},
                               {"num_views", used.size()}, {"hit_fraction", ray.hit_fraction},
                               {"build_s", ray.build_s}, {"intersect_s", ray.intersect_s},

@@ -347,10 +347,13 @@ json JobMetricsToJson(const JobOutputs& o) {
   json seams = json::array();
   for (const auto& s : o.assembly.seams) seams.push_back(SeamToJson(s));
   json pairs = json::array();
-  for (const auto& [i, j] : o.refine.pairs) pairs.push_back({i, j});
+  for (const auto& p : o.refine.pair_details)
+    pairs.push_back({{"views", {p.i, p.j}}, {"angle_deg", p.angle_deg}, {"overlap", p.overlap},
+                     {"score", p.score}});
   const double cell = o.plan.dsm.geo_transform[1];
   json metrics = {{"views", o.view_names},  // single-tile jobs (as before tiling)
           {"pairs", pairs},
+          {"candidate_pairs", o.refine.candidate_pairs},
           {"gsd_m", o.refine.gsd_m},
           {"levels", LevelsToJson(o.refine.levels)},
           {"tiling", {{"grid", {o.plan.nx, o.plan.ny}},

@@ -427,6 +427,10 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
                  options.levels, result.gsd_m, input.initial_cell_m, LevelEdge(options, result.gsd_m, options.levels));
   std::vector<PreparedView> views =
       PrepareViews(input, std::max(options.levels, options.estimate_bias ? BiasOptions().coarse_level : 0));
+  spdlog::info("refine: images' noise {:.4f} (std of the normalised full-resolution images, "
+               "mean over views): ZNCC variance floor {:.2e} at level 0",
+               std::sqrt(MeanNoiseVariance(views, 0)),
+               PhotometricOptionsAt(options, result.gsd_m, MeanNoiseVariance(views, 0)).zncc.variance_floor);
   progress.ThrowIfCancelled();
 
   // 2. Pairs.
