@@ -8,6 +8,8 @@
 #   scripts/build-image.sh [--tag localhost/satmesh:latest] [--base localhost/debian:12-slim]
 #                          [--jobs 2] [--git REV] [--mirror URL] [--rebuild-base]
 # --git REV builds the committed tree REV (git archive) instead of the working tree.
+# Exit status: 0 built; 2 usage; 3 this machine cannot build images at all (not root, host
+# tools not installable, no working container storage), named on stderr; else the build failed.
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 
@@ -31,7 +33,9 @@ while [ $# -gt 0 ]; do
     *) echo "build-image: unknown argument '$1'" >&2; usage ;;
   esac
 done
-[ "$(id -u)" -eq 0 ] || { echo "build-image: run as root (debootstrap, buildah mount)" >&2; exit 2; }
+# A machine that cannot build images at all: exit 3 with the reason (CI tells it apart).
+cannot() { echo "build-image: this machine cannot build images: $*" >&2; exit 3; }
+[ "$(id -u)" -eq 0 ] || cannot "not root (uid $(id -u)); debootstrap and buildah mount need root"
 case "$jobs" in ''|*[!0-9]*) echo "build-image: --jobs '$jobs' is not a positive integer" >&2; exit 2 ;; esac
 
 # Host tools (not project dependencies: docker/deps-debian12.txt is what the image installs).
@@ -43,8 +47,8 @@ install_host_tools() {
   [ -z "$missing" ] && return 0
   echo "build-image: installing host tools:$missing"
   export DEBIAN_FRONTEND=noninteractive
-  apt-get update -qq
-  apt-get install -y -qq --no-install-recommends $missing
+  apt-get update -qq || cannot "apt-get update failed (host tools:$missing)"
+  apt-get install -y -qq --no-install-recommends $missing || cannot "apt-get install$missing failed"
 }
 
 # overlay where the kernel allows it, else vfs (slower, always works).
@@ -57,6 +61,16 @@ pick_storage_driver() {
     [ -n "${ctr:-}" ] && buildah rm "$ctr" >/dev/null 2>&1 || true
     echo "build-image: overlay storage does not work here, using vfs"
     export STORAGE_DRIVER=vfs
+    local err
+    if ! ctr=$(buildah from scratch 2>"${TMPDIR:-/tmp}/build-image-storage.err") \
+        || ! buildah mount "$ctr" >/dev/null 2>>"${TMPDIR:-/tmp}/build-image-storage.err"; then
+      err="$(tail -3 "${TMPDIR:-/tmp}/build-image-storage.err")"
+      [ -n "${ctr:-}" ] && buildah rm "$ctr" >/dev/null 2>&1 || true
+      rm -f "${TMPDIR:-/tmp}/build-image-storage.err"
+      cannot "buildah cannot create and mount a container with overlay nor vfs storage: $err"
+    fi
+    buildah umount "$ctr" >/dev/null; buildah rm "$ctr" >/dev/null
+    rm -f "${TMPDIR:-/tmp}/build-image-storage.err"
   fi
 }
 
@@ -107,6 +121,18 @@ if [ "$rebuild_base" -eq 1 ] || ! buildah inspect --type image "$base" >/dev/nul
 else
   echo "build-image: base image $base present"
 fi
+
+# The RUN steps need `buildah run` (chroot isolation: mounts, namespaces) to work here.
+check_run() {
+  local ctr out
+  ctr=$(buildah from --pull=never "$base") || cannot "buildah from $base failed"
+  if ! out=$(buildah run --isolation chroot "$ctr" -- true 2>&1); then
+    buildah rm "$ctr" >/dev/null 2>&1 || true
+    cannot "buildah run --isolation chroot fails: $(echo "$out" | tail -3)"
+  fi
+  buildah rm "$ctr" >/dev/null
+}
+check_run
 
 context="$here"
 if [ -n "$git_rev" ]; then
