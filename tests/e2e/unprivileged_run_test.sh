@@ -50,10 +50,9 @@ server="$work/bin/$(basename "$server_bin")"
 touch "$work/start"
 
 # Runs "$@" as nobody:nogroup with / as its current directory and a minimal environment.
-as_nobody() {
-  (cd / && setpriv --reuid=nobody --regid=nogroup --clear-groups -- \
-     env -i PATH=/usr/bin:/bin HOME=/nonexistent LANG=C.UTF-8 "$@")
-}
+nobody_cmd=(setpriv --reuid=nobody --regid=nogroup --clear-groups --
+            env -i PATH=/usr/bin:/bin HOME=/nonexistent LANG=C.UTF-8)
+as_nobody() { (cd / && exec "${nobody_cmd[@]}" "$@"); }
 as_nobody sh -c 'test "$(id -un)" = nobody' || fail "setpriv did not switch to nobody"
 if as_nobody sh -c ': > ./satmesh-unpriv-probe' 2>/dev/null; then
   rm -f /satmesh-unpriv-probe
@@ -90,8 +89,11 @@ for p in $(shuf -i 20000-60000 -n 20); do
 done
 [ -n "$port" ] || fail "no free loopback port found"
 url="http://127.0.0.1:$port"
-as_nobody "$server" --host 127.0.0.1 --port "$port" --data-dir "$work/data" \
-  --data-root "$work/scene" --proto-dir "$work/proto" --workers 1 >"$work/server.log" 2>&1 &
+# One subshell that execs (setpriv and env exec too): $! is the server's own pid, so that
+# cleanup stops the server (a function run with & would fork twice, and the kill would
+# reach a shell, leaving the server running).
+(cd / && exec "${nobody_cmd[@]}" "$server" --host 127.0.0.1 --port "$port" --data-dir "$work/data" \
+  --data-root "$work/scene" --proto-dir "$work/proto" --workers 1) >"$work/server.log" 2>&1 &
 server_pid=$!
 ready=0
 for _ in $(seq 100); do
@@ -100,6 +102,8 @@ for _ in $(seq 100); do
   sleep 0.1
 done
 [ "$ready" -eq 1 ] || fail "satmesh-server does not listen on $url after 10 s"
+[ "$(readlink /proc/"$server_pid"/exe)" = "$server" ] \
+  || fail "pid $server_pid is not the server ($(readlink /proc/"$server_pid"/exe)): cleanup would not stop it"
 
 id=$(as_nobody "$satmesh" submit "$work/scene/job.json" --server "$url" --wait --quiet \
        --set "options.iterations_per_level=$iterations" 2>"$work/submit.log") \
