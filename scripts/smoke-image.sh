@@ -67,7 +67,10 @@ stop_server() {
 }
 
 # Runs on every exit (success, fail, set -e, SIGINT/SIGTERM): stops the server, removes
-# the containers, and fails loudly if the port still answers afterwards.
+# the containers, and fails loudly if the port still answers afterwards. set +e and the
+# explicit `return 0`s matter: in a function called from an EXIT trap a bare `return`
+# returns the status the script exits with, so after `fail` (exit 1) the old stop_server
+# died under set -e at `p="$(server_process ...)"` and left the server running.
 cleanup() {
   local rc=$? stopped=0
   set +e
