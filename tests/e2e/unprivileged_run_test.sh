@@ -30,6 +30,8 @@ for f in "$satmesh_bin" "$server_bin"; do [ -x "$f" ] || fail "no executable $f"
 work="$(mktemp -d /tmp/satmesh-unpriv.XXXXXX)"
 server_pid=""
 cleanup() {
+  local rc=$?
+  set +e  # under set -e a failing command would end the handler before the server stops
   if [ -n "$server_pid" ]; then
     kill -TERM "$server_pid" 2>/dev/null || true
     for _ in $(seq 50); do kill -0 "$server_pid" 2>/dev/null || break; sleep 0.1; done
@@ -37,6 +39,7 @@ cleanup() {
     wait "$server_pid" 2>/dev/null || true
   fi
   rm -rf "$work"
+  exit "$rc"
 }
 trap cleanup EXIT
 mkdir "$work/bin" "$work/scene" "$work/data"
