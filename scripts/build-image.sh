@@ -6,8 +6,10 @@
 # Run as root.
 #
 #   scripts/build-image.sh [--tag localhost/satmesh:latest] [--base localhost/debian:12-slim]
-#                          [--jobs 2] [--git REV] [--mirror URL] [--rebuild-base]
+#                          [--jobs 2] [--git REV] [--mirror URL] [--rebuild-base] [--ccache DIR]
 # --git REV builds the committed tree REV (git archive) instead of the working tree.
+# --ccache DIR mounts the compiler cache DIR into the compile step (reuses a host build's
+# objects: CI passes the cache its `scripts/build.sh` filled).
 # Exit status: 0 built; 2 usage; 3 this machine cannot build images at all (not root, host
 # tools not installable, no working container storage), named on stderr; else the build failed.
 set -euo pipefail
@@ -19,6 +21,7 @@ jobs=2                           # compile jobs inside the image build (ninja -j
 mirror=""                        # Debian mirror for debootstrap; default: the host's
 rebuild_base=0                   # 1: remake the base image even if present
 git_rev=""                       # build context: "" = working tree, else this commit
+ccache_dir=""                    # host compiler cache mounted at /ccache; "" = none
 
 usage() { sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 while [ $# -gt 0 ]; do
@@ -29,6 +32,7 @@ while [ $# -gt 0 ]; do
     --mirror) mirror="$2"; shift 2 ;;
     --git) git_rev="$2"; shift 2 ;;
     --rebuild-base) rebuild_base=1; shift ;;
+    --ccache) ccache_dir="$2"; shift 2 ;;
     -h|--help) usage ;;
     *) echo "build-image: unknown argument '$1'" >&2; usage ;;
   esac
@@ -142,9 +146,14 @@ if [ -n "$git_rev" ]; then
   # One fixed mtime: --layers then reuses the dependency layers across commits.
   find "$context" -exec touch -h -d @946684800 {} +
 fi
-echo "build-image: building $tag from ${git_rev:-the working tree} (niced, -j$jobs)"
+volume=()
+if [ -n "$ccache_dir" ]; then
+  mkdir -p "$ccache_dir"
+  volume=(--volume "$(cd "$ccache_dir" && pwd):/ccache")
+fi
+echo "build-image: building $tag from ${git_rev:-the working tree} (niced, -j$jobs${ccache_dir:+, ccache $ccache_dir})"
 cd "$context"
-nice -n 10 buildah bud --isolation chroot --layers --pull=never --format docker \
+nice -n 10 buildah bud --isolation chroot --layers --pull=never --format docker "${volume[@]}" \
   --build-arg DEBIAN_IMAGE="$base" --build-arg BUILD_JOBS="$jobs" \
   -f docker/Dockerfile -t "$tag" .
 buildah images --format '{{.Name}}:{{.Tag}} {{.Size}}' "$tag"
