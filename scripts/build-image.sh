@@ -6,8 +6,12 @@
 # Run as root.
 #
 #   scripts/build-image.sh [--tag localhost/satmesh:latest] [--base localhost/debian:12-slim]
-#                          [--jobs 2] [--git REV] [--mirror URL] [--rebuild-base]
+#                          [--jobs 2] [--git REV] [--mirror URL] [--rebuild-base] [--ccache DIR]
 # --git REV builds the committed tree REV (git archive) instead of the working tree.
+# --ccache DIR mounts the compiler cache DIR into the compile step (reuses a host build's
+# objects: CI passes the cache its `scripts/build.sh` filled).
+# Exit status: 0 built; 2 usage; 3 this machine cannot build images at all (not root, host
+# tools not installable, no working container storage), named on stderr; else the build failed.
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 
@@ -17,6 +21,7 @@ jobs=2                           # compile jobs inside the image build (ninja -j
 mirror=""                        # Debian mirror for debootstrap; default: the host's
 rebuild_base=0                   # 1: remake the base image even if present
 git_rev=""                       # build context: "" = working tree, else this commit
+ccache_dir=""                    # host compiler cache mounted at /ccache; "" = none
 
 usage() { sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 while [ $# -gt 0 ]; do
@@ -27,11 +32,14 @@ while [ $# -gt 0 ]; do
     --mirror) mirror="$2"; shift 2 ;;
     --git) git_rev="$2"; shift 2 ;;
     --rebuild-base) rebuild_base=1; shift ;;
+    --ccache) ccache_dir="$2"; shift 2 ;;
     -h|--help) usage ;;
     *) echo "build-image: unknown argument '$1'" >&2; usage ;;
   esac
 done
-[ "$(id -u)" -eq 0 ] || { echo "build-image: run as root (debootstrap, buildah mount)" >&2; exit 2; }
+# A machine that cannot build images at all: exit 3 with the reason (CI tells it apart).
+cannot() { echo "build-image: this machine cannot build images: $*" >&2; exit 3; }
+[ "$(id -u)" -eq 0 ] || cannot "not root (uid $(id -u)); debootstrap and buildah mount need root"
 case "$jobs" in ''|*[!0-9]*) echo "build-image: --jobs '$jobs' is not a positive integer" >&2; exit 2 ;; esac
 
 # Host tools (not project dependencies: docker/deps-debian12.txt is what the image installs).
@@ -43,8 +51,8 @@ install_host_tools() {
   [ -z "$missing" ] && return 0
   echo "build-image: installing host tools:$missing"
   export DEBIAN_FRONTEND=noninteractive
-  apt-get update -qq
-  apt-get install -y -qq --no-install-recommends $missing
+  apt-get update -qq || cannot "apt-get update failed (host tools:$missing)"
+  apt-get install -y -qq --no-install-recommends $missing || cannot "apt-get install$missing failed"
 }
 
 # overlay where the kernel allows it, else vfs (slower, always works).
@@ -57,6 +65,16 @@ pick_storage_driver() {
     [ -n "${ctr:-}" ] && buildah rm "$ctr" >/dev/null 2>&1 || true
     echo "build-image: overlay storage does not work here, using vfs"
     export STORAGE_DRIVER=vfs
+    local err
+    if ! ctr=$(buildah from scratch 2>"${TMPDIR:-/tmp}/build-image-storage.err") \
+        || ! buildah mount "$ctr" >/dev/null 2>>"${TMPDIR:-/tmp}/build-image-storage.err"; then
+      err="$(tail -3 "${TMPDIR:-/tmp}/build-image-storage.err")"
+      [ -n "${ctr:-}" ] && buildah rm "$ctr" >/dev/null 2>&1 || true
+      rm -f "${TMPDIR:-/tmp}/build-image-storage.err"
+      cannot "buildah cannot create and mount a container with overlay nor vfs storage: $err"
+    fi
+    buildah umount "$ctr" >/dev/null; buildah rm "$ctr" >/dev/null
+    rm -f "${TMPDIR:-/tmp}/build-image-storage.err"
   fi
 }
 
@@ -108,6 +126,18 @@ else
   echo "build-image: base image $base present"
 fi
 
+# The RUN steps need `buildah run` (chroot isolation: mounts, namespaces) to work here.
+check_run() {
+  local ctr out
+  ctr=$(buildah from --pull=never "$base") || cannot "buildah from $base failed"
+  if ! out=$(buildah run --isolation chroot "$ctr" -- true 2>&1); then
+    buildah rm "$ctr" >/dev/null 2>&1 || true
+    cannot "buildah run --isolation chroot fails: $(echo "$out" | tail -3)"
+  fi
+  buildah rm "$ctr" >/dev/null
+}
+check_run
+
 context="$here"
 if [ -n "$git_rev" ]; then
   context="$(mktemp -d /tmp/satmesh-context.XXXXXX)"
@@ -116,9 +146,14 @@ if [ -n "$git_rev" ]; then
   # One fixed mtime: --layers then reuses the dependency layers across commits.
   find "$context" -exec touch -h -d @946684800 {} +
 fi
-echo "build-image: building $tag from ${git_rev:-the working tree} (niced, -j$jobs)"
+volume=()
+if [ -n "$ccache_dir" ]; then
+  mkdir -p "$ccache_dir"
+  volume=(--volume "$(cd "$ccache_dir" && pwd):/ccache")
+fi
+echo "build-image: building $tag from ${git_rev:-the working tree} (niced, -j$jobs${ccache_dir:+, ccache $ccache_dir})"
 cd "$context"
-nice -n 10 buildah bud --isolation chroot --layers --pull=never --format docker \
+nice -n 10 buildah bud --isolation chroot --layers --pull=never --format docker "${volume[@]}" \
   --build-arg DEBIAN_IMAGE="$base" --build-arg BUILD_JOBS="$jobs" \
   -f docker/Dockerfile -t "$tag" .
 buildah images --format '{{.Name}}:{{.Tag}} {{.Size}}' "$tag"

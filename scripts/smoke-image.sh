@@ -37,36 +37,57 @@ srv="" cli="" server_pid=""
 
 fail() { echo "smoke-image: FAIL: $*" >&2; [ -f "$work/server.log" ] && tail -20 "$work/server.log" >&2; exit 1; }
 
-# The server process under `buildah run` (its descendant), so that it gets the SIGTERM.
-server_process() {
-  local pids="$1" all="" next
-  while [ -n "$pids" ]; do
-    all="$all $pids"
-    next=""
-    for p in $pids; do next="$next $(pgrep -P "$p" || true)"; done
-    pids="$(echo $next)"
+# `buildah run` does not take its container's processes with it when killed: they live
+# on as orphans, and the server keeps the port. So the server runs in a process group of
+# its own (setsid), and stopping it ends the whole group, whatever state it is in.
+server_process() {  # the satmesh-server process of that group, if any
+  local p
+  for p in $(pgrep -g "$server_pid" || true); do
+    [ "$(cat /proc/"$p"/comm 2>/dev/null)" = "satmesh-server" ] && { echo "$p"; return 0; }
   done
-  for p in $all; do
-    [ "$(cat /proc/"$p"/comm 2>/dev/null)" = "satmesh-server" ] && { echo "$p"; return; }
-  done
+  return 0
 }
+
+group_alive() { pgrep -g "$server_pid" >/dev/null 2>&1; }
 
 stop_server() {
   [ -n "$server_pid" ] || return 0
-  local p; p="$(server_process "$server_pid")"
-  [ -n "$p" ] && kill -TERM "$p" 2>/dev/null
-  for _ in $(seq 50); do kill -0 "$server_pid" 2>/dev/null || break; sleep 0.2; done
-  kill -0 "$server_pid" 2>/dev/null && kill -KILL "$server_pid" 2>/dev/null
+  local p; p="$(server_process)"
+  # SIGTERM to the server (its graceful stop), then up to 10 s for the group to end.
+  if [ -n "$p" ]; then kill -TERM "$p" 2>/dev/null || true; else kill -TERM -- -"$server_pid" 2>/dev/null || true; fi
+  for _ in $(seq 50); do group_alive || break; sleep 0.2; done
+  if group_alive; then
+    echo "smoke-image: the server did not stop in 10 s on SIGTERM; killing its process group" >&2
+    kill -KILL -- -"$server_pid" 2>/dev/null || true
+    for _ in $(seq 25); do group_alive || break; sleep 0.2; done
+  fi
   wait "$server_pid" 2>/dev/null || true
+  group_alive && { echo "smoke-image: ERROR: processes of the server's group $server_pid survive: $(pgrep -g "$server_pid" | tr '\n' ' ')" >&2; return 1; }
   server_pid=""
 }
 
+# Runs on every exit (success, fail, set -e, SIGINT/SIGTERM): stops the server, removes
+# the containers, and fails loudly if the port still answers afterwards. set +e and the
+# explicit `return 0`s matter: in a function called from an EXIT trap a bare `return`
+# returns the status the script exits with, so after `fail` (exit 1) the old stop_server
+# died under set -e at `p="$(server_process ...)"` and left the server running.
 cleanup() {
-  stop_server
+  local rc=$? stopped=0
+  set +e
+  trap - EXIT INT TERM
+  stop_server && stopped=1
   for c in $srv $cli; do buildah rm "$c" >/dev/null 2>&1 || true; done
   if [ "$keep" -eq 1 ]; then echo "smoke-image: kept $work"; else rm -rf "$work"; fi
+  if [ "$stopped" -ne 1 ] || { [ "$started" -eq 1 ] && curl -s -o /dev/null --max-time 2 "$url/health"; }; then
+    echo "smoke-image: ERROR: the server from the image still runs or port $port still answers after cleanup" >&2
+    [ "$rc" -ne 0 ] || rc=1
+  fi
+  exit "$rc"
 }
+started=0  # 1 once this run started a server (the port was free before)
 trap cleanup EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
 
 buildah inspect --type image "$tag" >/dev/null 2>&1 || fail "no image $tag (run scripts/build-image.sh)"
 srv=$(buildah from --pull=never "$tag")
@@ -76,10 +97,14 @@ in_client() { buildah run --isolation chroot -v "$work/inputs:/inputs" "$cli" --
 echo "smoke-image: user $(buildah run --isolation chroot "$srv" -- id -un), $(in_client satmesh-server --help | head -1)"
 curl -s -o /dev/null "$url/health" && fail "port $port is already in use"
 
-buildah run --isolation chroot -v "$work/data:/data" -v "$work/inputs:/inputs:ro" "$srv" -- \
+setsid buildah run --isolation chroot -v "$work/data:/data" -v "$work/inputs:/inputs:ro" "$srv" -- \
   satmesh-server --host 127.0.0.1 --port "$port" --data-dir /data --data-root /inputs \
   --proto-dir /usr/local/share/satmesh/proto --workers 2 >"$work/server.log" 2>&1 &
 server_pid=$!
+started=1
+if kill -0 "$server_pid" 2>/dev/null && [ "$(ps -o pgid= -p "$server_pid" | tr -d ' ')" != "$server_pid" ]; then
+  fail "setsid did not give the server a process group of its own (pid $server_pid)"
+fi
 for _ in $(seq 100); do
   curl -fsS -o /dev/null "$url/health" 2>/dev/null && break
   kill -0 "$server_pid" 2>/dev/null || fail "the server exited"
@@ -109,5 +134,6 @@ if [ "$job" -eq 1 ]; then
   echo "smoke-image: results: $(ls "$work/inputs/result" | tr '\n' ' ')"
 fi
 
-stop_server
+stop_server || fail "cannot stop the server"
+curl -s -o /dev/null --max-time 2 "$url/health" && fail "port $port still answers after the server stopped"
 echo "smoke-image: OK ($tag)"

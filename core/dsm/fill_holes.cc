@@ -1,5 +1,6 @@
 #include "core/dsm/fill_holes.h"
 
+#include <cpl_string.h>
 #include <gdal_alg.h>
 #include <gdal_priv.h>
 
@@ -68,7 +69,12 @@ size_t FillDsmHoles(Dsm* dsm, double max_distance_m) {
                 ErrorCode::kInternal, "GDAL: cannot write the DSM to a MEM raster");
   const double cell_m = std::abs(dsm->geo_transform[1]);
   const double max_cells = std::max(1.0, max_distance_m / cell_m);
-  SATMESH_CHECK(GDALFillNodata(band, mask, max_cells, 0, 0, nullptr, nullptr, nullptr) == CE_None,
+  // GDAL's work rasters in memory: by default it writes them as GeoTIFFs into the current
+  // directory (CPLGenerateTempFilename), which fails wherever that is not writable, as in
+  // the image, a service, or a run from / (issue 17).
+  CPLStringList fill_options;
+  fill_options.SetNameValue("TEMP_FILE_DRIVER", "MEM");
+  SATMESH_CHECK(GDALFillNodata(band, mask, max_cells, 0, 0, fill_options.List(), nullptr, nullptr) == CE_None,
                 ErrorCode::kInternal, "GDALFillNodata failed: " + std::string(CPLGetLastErrorMsg()));
   // Cells GDAL found no valid cell for keep their NaN.
   SATMESH_CHECK(band->RasterIO(GF_Read, 0, 0, w, h, z.data(), w, h, GDT_Float32, 0, 0) == CE_None,

@@ -12,7 +12,7 @@ namespace satmesh {
 // GDAL's inverse-distance interpolation (GDALFillNodata) from the valid cells within
 // max_distance_m; cells farther from any valid cell, and every cell outside the hull
 // (off the data's footprint), stay empty. max_distance_m <= 0 fills nothing. Returns the
-// number of cells filled.
+// number of cells filled. Writes no file: GDAL's work rasters stay in memory.
 size_t FillDsmHoles(Dsm* dsm, double max_distance_m);
 
 }  // namespace satmesh

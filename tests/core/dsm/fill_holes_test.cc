@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <limits>
 
 namespace satmesh {
@@ -41,6 +45,26 @@ TEST(FillDsmHoles, FillsAHoleFromItsSurroundings) {
   for (size_t k = 0; k < dsm.z.size(); ++k) worst = std::max(worst, double(std::abs(dsm.z[k] - truth.z[k])));
   EXPECT_LT(worst, 0.3);  // the plane rises 0.6 m across the hole
   EXPECT_NEAR(dsm.at(5, 50), truth.at(5, 50), 0.05);
+}
+
+// Issue 17: GDALFillNodata wrote its work rasters into the current directory, so a run
+// from an unwritable one (the image's non-root user, a service, `cd /`) failed. /proc
+// is unwritable even for root; the fill must neither need nor touch the directory.
+TEST(FillDsmHoles, WorksFromAnUnwritableCurrentDirectory) {
+  struct RestoreCwd {
+    std::filesystem::path path = std::filesystem::current_path();
+    ~RestoreCwd() { std::filesystem::current_path(path); }
+  } restore;
+  ASSERT_EQ(chdir("/proc"), 0);
+  const int probe = open("satmesh-probe", O_CREAT | O_WRONLY, 0600);  // access() lets root pass
+  ASSERT_LT(probe, 0) << "a file can be created in /proc here: the test proves nothing";
+  Dsm dsm = TiltedPlane(40, 30);
+  for (int j = 10; j < 16; ++j)
+    for (int i = 15; i < 20; ++i) dsm.at(i, j) = kNaN;
+  size_t filled = 0;
+  EXPECT_NO_THROW(filled = FillDsmHoles(&dsm, 50.0));
+  EXPECT_EQ(filled, 30u);
+  EXPECT_EQ(CountNaN(dsm), 0u);
 }
 
 TEST(FillDsmHoles, LeavesTheOutsideOfTheFootprintAndFarCellsEmpty) {
