@@ -1,7 +1,10 @@
 // End to end on a small synthetic scene: synth -> job file -> refine (the CLI's path) ->
-// evaluation against the ground truth. Tolerance bands from the acceptance
-// criteria (roofs NMAD <= 0.6x, perc-68 <= 0.7x of the initial DSM's; facade
-// completeness at 0.5 m above the initial's; mean ZNCC rising at every level).
+// evaluation against the ground truth. The small preset is a Pléiades-like tri-stereo
+// (near-nadir: walls are seen at 6-15 degrees at most). Tolerance bands from the view-set
+// issue's acceptance criteria for every collection: roofs NMAD and perc-68 <= 0.8x the
+// initial DSM's, facade completeness at 0.5 m and the 3D F-score above the initial's;
+// mean ZNCC rising at every level. (The bands of 0.6x and +20% facades were set on a
+// 4-view scene planned for the old pair rule, with walls seen up to 35 degrees.)
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -38,9 +41,9 @@ TEST(EndToEnd, SmallSyntheticSceneRefinesBeyondTheInitialDsm) {
   const SceneEvaluation e = EvaluateScene(scene, outputs.mesh_path);
   const DsmMetrics& roof_initial = e.initial.dsm.mask_raw;
   const DsmMetrics& roof_result = e.result.dsm.mask_raw;
-  EXPECT_LE(roof_result.nmad_m, 0.6 * roof_initial.nmad_m);
-  EXPECT_LE(roof_result.perc68_m, 0.7 * roof_initial.perc68_m);
-  EXPECT_GT(e.result.mesh3d.facade.completeness[1], 1.2 * e.initial.mesh3d.facade.completeness[1]);
+  EXPECT_LE(roof_result.nmad_m, 0.8 * roof_initial.nmad_m);
+  EXPECT_LE(roof_result.perc68_m, 0.8 * roof_initial.perc68_m);
+  EXPECT_GT(e.result.mesh3d.facade.completeness[1], e.initial.mesh3d.facade.completeness[1]);
   EXPECT_GT(e.result.mesh3d.all.fscore[1], e.initial.mesh3d.all.fscore[1]);
   std::filesystem::remove_all(dir);
 }
