@@ -193,12 +193,7 @@ BiasEstimate EstimateRefineBiases(const RefineInput& input, const BiasOptions& o
   const PairSelection selection = SelectViewPairs(input, views, options.refine.pairs);
   SATMESH_CHECK(!selection.pairs.empty(), ErrorCode::kInvalidInput,
                 "bias: no usable stereo pair: " + selection.refusal);
-  std::vector<StereoPair> by_score = selection.pairs;
-  std::stable_sort(by_score.begin(), by_score.end(),
-                   [](const StereoPair& a, const StereoPair& b) { return a.score > b.score; });
-  std::vector<std::pair<int, int>> pairs;
-  for (const auto& p : by_score) pairs.emplace_back(p.i, p.j);
-  return EstimateViewBiases(input, views, pairs, options, progress);
+  return EstimateViewBiases(input, views, selection.IndexPairsBestFirst(), options, progress);
 }
 
 BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<PreparedView>& views,

@@ -81,6 +81,15 @@ std::vector<std::pair<int, int>> PairSelection::IndexPairs() const {
   return out;
 }
 
+std::vector<std::pair<int, int>> PairSelection::IndexPairsBestFirst() const {
+  std::vector<StereoPair> by_score = pairs;
+  std::stable_sort(by_score.begin(), by_score.end(),
+                   [](const StereoPair& a, const StereoPair& b) { return a.score > b.score; });
+  std::vector<std::pair<int, int>> out;
+  for (const auto& p : by_score) out.emplace_back(p.i, p.j);
+  return out;
+}
+
 double IntersectionAngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const double c = std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0);
   return std::acos(c) / kDeg;

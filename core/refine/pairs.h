@@ -42,6 +42,8 @@ struct PairSelection {
   std::vector<int> unpaired_views;  // usable views left without a partner
   std::string refusal;              // no pair at all: why (names views and angles)
   std::vector<std::pair<int, int>> IndexPairs() const;
+  // The same, highest score first (the order the bias estimation takes neighbours in).
+  std::vector<std::pair<int, int>> IndexPairsBestFirst() const;
 };
 
 double IntersectionAngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b);

@@ -324,12 +324,8 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
   const auto t0 = Clock::now();
   BiasOptions bias;
   bias.refine = options;
-  std::vector<StereoPair> by_score = selection.pairs;
-  std::stable_sort(by_score.begin(), by_score.end(),
-                   [](const StereoPair& a, const StereoPair& b) { return a.score > b.score; });
-  std::vector<std::pair<int, int>> pairs;
-  for (const auto& p : by_score) pairs.emplace_back(p.i, p.j);
-  const BiasEstimate estimate = EstimateViewBiases(input, *views, pairs, bias, progress);
+  const BiasEstimate estimate =
+      EstimateViewBiases(input, *views, selection.IndexPairsBestFirst(), bias, progress);
   for (size_t v = 0; v < views->size(); ++v) {
     RpcModel& rpc = (*views)[v].rpc;
     rpc = rpc.WithBias(rpc.bias() + estimate.bias_col_row_px[v]);
