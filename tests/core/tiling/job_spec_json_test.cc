@@ -51,6 +51,50 @@ TEST(JobSpecFromJson, ReadsHowOftenHitMapsAreMadeAnew) {
       << ErrorOf(job);
 }
 
+TEST(JobSpecFromJson, ReadsThePairSelectionAndConfidenceOptions) {
+  json job = MinimalJob();
+  job["options"]["min_pair_angle_deg"] = 3;
+  job["options"]["max_pair_angle_deg"] = 45;
+  job["options"]["optimal_pair_angle_deg"] = 15;
+  job["options"]["min_pair_overlap"] = 0.5;
+  job["options"]["pair_partners_per_view"] = 2;
+  job["options"]["max_pairs"] = 20;
+  job["options"]["min_height_confidence"] = 0.2;
+  job["options"]["hold_unseen"] = false;
+  job["options"]["noise_variance_factor"] = 0;
+  job["options"]["levels"] = -1;
+  job["options"]["max_coarse_edge_m"] = 3;
+  const RefineOptions o = proto::JobSpecFromJson(job, "/base").refine;
+  EXPECT_EQ(o.pairs.min_angle_deg, 3);
+  EXPECT_EQ(o.pairs.max_angle_deg, 45);
+  EXPECT_EQ(o.pairs.optimal_angle_deg, 15);
+  EXPECT_EQ(o.pairs.min_overlap, 0.5);
+  EXPECT_EQ(o.pairs.partners_per_view, 2);
+  EXPECT_EQ(o.pairs.max_pairs, 20);
+  EXPECT_EQ(o.min_height_confidence, 0.2);
+  EXPECT_FALSE(o.hold_unseen);
+  EXPECT_EQ(o.noise_variance_factor, 0);
+  EXPECT_EQ(o.levels, -1);
+  EXPECT_EQ(o.max_coarse_edge_m, 3);
+  job["options"]["optimal_pair_angle_deg"] = 50;  // above max_pair_angle_deg
+  EXPECT_NE(ErrorOf(job).find("pairs.optimal_angle_deg"), std::string::npos) << ErrorOf(job);
+  job["options"]["optimal_pair_angle_deg"] = 15;
+  job["options"]["min_height_confidence"] = 0;
+  EXPECT_NE(ErrorOf(job).find("min_height_confidence"), std::string::npos) << ErrorOf(job);
+}
+
+TEST(ResolveLevels, CoarseEdgeStaysUnderTheBound) {
+  RefineOptions o;  // levels -1, coarse edge 2 px, bound 2 m
+  EXPECT_EQ(ResolveLevels(o, 0.3, 0.3), 1);   // 1.2 m (2.4 m at L = 2)
+  EXPECT_EQ(ResolveLevels(o, 0.5, 0.5), 1);   // 2.0 m
+  EXPECT_EQ(ResolveLevels(o, 0.7, 0.5), 0);   // 1.4 m; 2.8 m at L = 1
+  EXPECT_EQ(ResolveLevels(o, 0.3, 2.0), 1);   // a 2 m DSM: the bound is its cell
+  EXPECT_EQ(ResolveLevels(o, 0.3, 5.0), 3);   // a 5 m DSM: 4.8 m, capped at 3
+  EXPECT_EQ(ResolveLevels(o, 0.1, 0.1), 3);
+  o.levels = 2;
+  EXPECT_EQ(ResolveLevels(o, 0.5, 0.5), 2);   // the user's choice stands
+}
+
 TEST(JobSpecFromJson, ReadsAoiAndTiling) {
   json job = MinimalJob();
   job["aoi"] = {{"bbox", {10, 20, 110, 220}}, {"crs", "EPSG:32617"}};
