@@ -58,10 +58,20 @@ double PairHeightInformation(double angle_deg) {
 // weight is divided by it, so that where the images constrain the surface weakly (one
 // narrow pair, occlusion), the surface stays smooth and near where it started rather
 // than following matching noise.
-double HeightConfidence(double information, const RefineOptions& options) {
+// `relative_information` is already divided by one optimal pair's information
+// (MeanRelativePairInformation), so the per-vertex call in the update loop is a clamp.
+double HeightConfidence(double relative_information, const RefineOptions& options) {
   if (!(options.min_height_confidence < 1)) return 1.0;
-  const double reference = PairHeightInformation(options.pairs.optimal_angle_deg);
-  return std::clamp(information / reference, options.min_height_confidence, 1.0);
+  return std::clamp(relative_information, options.min_height_confidence, 1.0);
+}
+
+// Mean over the pairs of PairHeightInformation, relative to one pair at the optimal angle.
+double MeanRelativePairInformation(const std::vector<StereoPair>& pairs,
+                                   const RefineOptions& options) {
+  double information = 0;
+  for (const StereoPair& p : pairs) information += PairHeightInformation(p.angle_deg);
+  information /= double(std::max<size_t>(1, pairs.size()));
+  return information / PairHeightInformation(options.pairs.optimal_angle_deg);
 }
 
 void CheckInput(const RefineInput& input) {
@@ -81,7 +91,7 @@ struct LevelContext {
   const Progress& progress;
   const std::vector<PreparedView>& sources;
   std::vector<std::pair<int, int>>& pairs;
-  double mean_pair_information;  // mean over the pairs of PairHeightInformation
+  double mean_pair_information;  // MeanRelativePairInformation of the selected pairs
   double gsd_m;
 };
 
@@ -343,11 +353,13 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   RefineResult* result) {
   TriangleMesh mesh =
       RemeshForLevel(input.initial_mesh, options, result->gsd_m, options.levels, progress);
-  double information = 0;
-  for (const StereoPair& p : result->pair_details) information += PairHeightInformation(p.angle_deg);
-  information /= double(std::max<size_t>(1, result->pair_details.size()));
-  const LevelContext ctx{input,         options,     progress, views, result->pairs,
-                         information, result->gsd_m};
+  const LevelContext ctx{input,
+                         options,
+                         progress,
+                         views,
+                         result->pairs,
+                         MeanRelativePairInformation(result->pair_details, options),
+                         result->gsd_m};
   bool check_initial = options.restart_from_initial;
   for (int level = options.levels; level >= 0; --level) {
     const auto level_start = Clock::now();
