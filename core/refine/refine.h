@@ -53,6 +53,10 @@ struct LevelStats {
   double initial_zncc = std::numeric_limits<double>::quiet_NaN();
   bool restarted = false;
   double initial_check_s = 0;          // meshing and measuring the initial surface
+  // 10/50/90% quantiles of the vertices' height sigma from the images, in level GSD
+  // (refine.cc, HeightConfidenceFromInformation); empty: not measured.
+  std::vector<double> height_sigma_gsd_q;
+  std::vector<float> vertex_height_sigma_m;  // level 0 until CoarseToFine moves it to the result
   StageTimes times;
   double level_s = 0;                  // all of the level, initial_check_s included
 };
@@ -68,6 +72,10 @@ struct RefineResult {
   std::vector<LevelStats> levels;      // coarse to fine (options.levels resolved: ResolveLevels)
   double gsd_m = 0;                    // full-resolution GSD
   double total_s = 0;
+  // Per vertex of `mesh`: how well the images determine its position along the surface
+  // normal, metres (1 sigma under the images' noise, from the Fisher information of the
+  // pixels of all pair-directions that see it at full resolution; +inf: none sees it).
+  std::vector<float> vertex_height_sigma_m;
 };
 
 // Mean ZNCC (the photo-consistency the refinement maximises) of `mesh` (in input.frame)
