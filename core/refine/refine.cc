@@ -466,7 +466,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
     stats.restarted = restarted;
     stats.initial_check_s = check_s;
     stats.level_s = Seconds(level_start);
-    if (level == 0) result->vertex_height_sigma_m = std::move(stats.vertex_height_sigma_m);
+    if (level == 0) mesh.height_sigma = std::move(stats.vertex_height_sigma_m);
     result->levels.push_back(std::move(stats));
   }
   result->mesh = std::move(mesh);

@@ -62,7 +62,9 @@ struct LevelStats {
 };
 
 struct RefineResult {
-  TriangleMesh mesh;                   // in the input frame
+  TriangleMesh mesh;                   // in the input frame; height_sigma from the Fisher
+                                       // information of the full-resolution pixels of all
+                                       // pair-directions that see each vertex
   std::vector<std::pair<int, int>> pairs;  // selected (view indices), sorted
   std::vector<StereoPair> pair_details;    // the same, with angle, overlap and score
   int candidate_pairs = 0;                 // pairs that passed angle, overlap and contrast
@@ -72,10 +74,6 @@ struct RefineResult {
   std::vector<LevelStats> levels;      // coarse to fine (options.levels resolved: ResolveLevels)
   double gsd_m = 0;                    // full-resolution GSD
   double total_s = 0;
-  // Per vertex of `mesh`: how well the images determine its position along the surface
-  // normal, metres (1 sigma under the images' noise, from the Fisher information of the
-  // pixels of all pair-directions that see it at full resolution; +inf: none sees it).
-  std::vector<float> vertex_height_sigma_m;
 };
 
 // Mean ZNCC (the photo-consistency the refinement maximises) of `mesh` (in input.frame)
