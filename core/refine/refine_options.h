@@ -63,17 +63,17 @@ struct RefineOptions {
                                      // false: both directions every iteration (the paper)
   bool normalize_by_pair_count = true;  // divide each vertex's photometric gradient by the
                                         // number of pair-directions that saw it (OpenMVS)
-  double min_height_confidence = 0.1;  // floor of a vertex's height confidence: the height
-                                       // information (B/H)² of the pairs that see it over
-                                       // that of one pair at pairs.optimal_angle_deg; the
-                                       // thin-plate weight is divided by it (refine.cc,
-                                       // HeightConfidence). 1: off (uniform beta), (0, 1]
-  double height_sigma_gsd = 0.0;   // > 0: a vertex's height confidence comes from the
+  double min_height_confidence = 0.1;  // floor of a vertex's height confidence (see
+                                       // height_sigma_gsd); the thin-plate weight is
+                                       // divided by it. 1: off (uniform beta), (0, 1]
+  double height_sigma_gsd = 0.05;  // > 0: a vertex's height confidence comes from the
                                    // images (Fisher information of the pixels that see
-                                   // it under the images' noise): 1 where they determine
-                                   // its height to within this, in level GSD (1 sigma),
-                                   // falling as (this / sigma)² below; 0: from the
-                                   // pairs' geometry only, >= 0
+                                   // it under the images' noise, refine.cc,
+                                   // HeightConfidenceFromInformation): 1 where they
+                                   // determine its height to within this, in level GSD
+                                   // (1 sigma), falling as (this / sigma)² to
+                                   // min_height_confidence; 0: from the pairs' geometry
+                                   // only (HeightConfidence), >= 0
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing
