@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -26,6 +27,31 @@ JobSpec ReadJobWithOverrides(const std::string& job_path, const std::vector<std:
   return proto::JobSpecFromJson(job, std::filesystem::path(job_path).parent_path().string());
 }
 
+namespace {
+
+// DIR/viewer.html (the page satmesh-server serves at /jobs/{id}/viewer) and DIR/Cesium, a
+// link to the CesiumJS the build (or the image) carries: any static file server started
+// in DIR shows the result. SATMESH_VIEWER_DIR overrides where they are taken from.
+void WriteViewer(const std::string& out_dir) {
+  namespace fs = std::filesystem;
+  const char* env = std::getenv("SATMESH_VIEWER_DIR");
+  const fs::path from = env && *env ? fs::path(env) : fs::path(SATMESH_VIEWER_DIR);
+  std::error_code ec;
+  if (!fs::exists(from / "viewer.html", ec) || !fs::exists(from / "Cesium" / "Cesium.js", ec)) {
+    spdlog::warn("no viewer written: '{}' has no viewer.html and Cesium/ (set SATMESH_VIEWER_DIR)", from.string());
+    return;
+  }
+  fs::copy_file(from / "viewer.html", fs::path(out_dir) / "viewer.html", fs::copy_options::overwrite_existing);
+  const fs::path link = fs::path(out_dir) / "Cesium";
+  if (fs::is_symlink(link, ec) || !fs::exists(link, ec)) {
+    fs::remove(link, ec);
+    fs::create_directory_symlink(fs::canonical(from / "Cesium"), link);
+  }
+  spdlog::info("viewer: {}/viewer.html (serve {} over HTTP, e.g. python3 -m http.server -d {})", out_dir, out_dir, out_dir);
+}
+
+}  // namespace
+
 JobOutputs RunJobFile(const std::string& job_path, const std::string& out_dir,
                       const std::vector<std::string>& overrides) {
   const JobSpec spec = ReadJobWithOverrides(job_path, overrides);
@@ -44,6 +70,7 @@ JobOutputs RunJobFile(const std::string& job_path, const std::string& out_dir,
   };
   JobOutputs outputs = RunJob(spec, out_dir, progress);
   proto::WriteJobJson(outputs, out_dir);
+  WriteViewer(out_dir);
   spdlog::info("wrote {}, {}, {}/tileset.json, {}/metrics.json, {}/tiles/", outputs.mesh_path,
                outputs.dsm_path, out_dir, out_dir, out_dir);
   return outputs;

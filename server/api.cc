@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <regex>
 #include <thread>
 
 #include "core/common/error.h"
@@ -52,6 +53,26 @@ void SendFile(httplib::Response& res, const fs::path& path) {
   res.set_content(data.str(), ContentType(path.string()));
 }
 
+// The methods each route answers (HEAD goes with GET; OPTIONS with every route): the one
+// table behind 405 + Allow and the CORS preflight. Empty: no such route (404).
+std::string AllowedMethods(const std::string& path) {
+  static const std::regex get_only(
+      R"(/|/conformance|/api|/health|/metrics|/processes|/processes/[^/]+|/jobs/[^/]+/(tiles|results|events|viewer|tileset\.json)|/jobs/[^/]+(/results)?/tiles/\d{1,6}_\d{1,6}\.glb|/jobs/[^/]+/results/[^/]+|/viewer/.+)");
+  static const std::regex post(R"(/processes/[^/]+/execution)");
+  static const std::regex get_delete(R"(/jobs/[^/]+)");
+  if (std::regex_match(path, get_only) || path == "/jobs") return "GET, HEAD, OPTIONS";
+  if (std::regex_match(path, post)) return "POST, OPTIONS";
+  if (std::regex_match(path, get_delete)) return "GET, HEAD, DELETE, OPTIONS";
+  return "";
+}
+
+// Pages a browser opens by navigating (no Authorization header): the viewer page (the
+// same for every job; it sends the token itself) and CesiumJS.
+bool IsPublicPage(const std::string& path) {
+  static const std::regex viewer(R"(/jobs/[^/]+/viewer)");
+  return path == "/health" || path.rfind("/viewer/", 0) == 0 || std::regex_match(path, viewer);
+}
+
 [[noreturn]] void NoSuchJob(const std::string& id) {
   throw HttpError(404, "no-such-job", "no job with id '" + id + "'");
 }
@@ -64,6 +85,11 @@ std::string ServerOptions::Check() const {
   if (max_body_bytes < 1024) return "max_body_bytes: must be >= 1024";
   if (http_threads < 1 || http_threads > 1024) return "http_threads: not in [1, 1024]";
   if (max_stream_s < 1) return "max_stream_s: must be >= 1";
+  for (const auto& origin : cors_origins) {
+    const bool ok = origin == "*" || ((origin.rfind("http://", 0) == 0 || origin.rfind("https://", 0) == 0) &&
+                                      origin.find('/', origin.find("//") + 2) == std::string::npos);
+    if (!ok) return "cors_origins: '" + origin + "' is not '*' or an origin (scheme://host[:port], no path)";
+  }
   std::string p = inputs.Check();
   if (!p.empty()) return p;
   return scheduler.Check();
@@ -77,6 +103,7 @@ struct ApiServer::Impl {
   httplib::Server http;
   std::thread listener;
   json job_schema, openapi;
+  std::string viewer_dir, viewer_page;
 
   Impl(const ServerOptions& o, JobExecutor* e)
       : options(o), executor(e), store(o.data_dir), scheduler(&store, e, o.scheduler) {}
@@ -97,7 +124,13 @@ struct ApiServer::Impl {
     } catch (const json::parse_error& e) {
       throw HttpError(400, "invalid-json", std::string("request body: ") + e.what());
     }
+    // OGC API - Processes: {"inputs": {"job": JOB}} as the process description declares;
+    // also accepted: {"inputs": JOB} and JOB itself.
     json job = body.is_object() && body.contains("inputs") ? body["inputs"] : body;
+    if (job.is_object() && job.size() == 1 && job.contains("job")) {
+      job = json(job["job"]);
+      if (!job.is_object()) throw HttpError(400, "bad-request", "inputs.job: must be an object (the job)");
+    }
     ResolveHrefs(&job, options.inputs);
     const JobSpec spec = proto::JobSpecFromJson(job, "/");
     const std::string problem = spec.Check();
@@ -229,6 +262,52 @@ struct ApiServer::Impl {
                SendFile(res, file);
              });
     http.Get(R"(/jobs/([^/]+)/events)", [this](const auto& req, auto& res) { Stream(req.matches[1], res); });
+    http.Get(R"(/jobs/([^/]+)/tileset\.json)", [this](const auto& req, auto& res) {
+      const JobRecord job = RequireJob(req.matches[1]);
+      if (job.status == JobStatus::kDismissed) throw HttpError(410, "job-dismissed", "job '" + job.id + "' was dismissed");
+      res.set_header("Cache-Control", "no-cache");
+      SendJson(res, LiveTileset(job));
+    });
+    http.Get(R"(/jobs/([^/]+)/viewer)", [this](const auto& req, auto& res) {
+      RequireJob(req.matches[1]);
+      res.set_content(viewer_page, "text/html; charset=utf-8");
+    });
+    SATMESH_CHECK(http.set_mount_point("/viewer/Cesium", viewer_dir + "/Cesium"), ErrorCode::kIo,
+                  "viewer: cannot serve '" + viewer_dir + "/Cesium'");
+  }
+
+  // CORS: allowed origins get Access-Control-Allow-Origin on every answer; preflights
+  // (OPTIONS with Access-Control-Request-Method) are answered here, before authentication.
+  // Returns true when the request is answered.
+  bool AnswerCorsAndMethods(const httplib::Request& req, httplib::Response& res) const {
+    const std::string origin = req.get_header_value("Origin");
+    bool allowed_origin = false;
+    for (const auto& o : options.cors_origins) allowed_origin = allowed_origin || o == "*" || o == origin;
+    if (!origin.empty() && allowed_origin) {
+      const bool any = std::find(options.cors_origins.begin(), options.cors_origins.end(), "*") != options.cors_origins.end();
+      res.set_header("Access-Control-Allow-Origin", any ? "*" : origin);
+      if (!any) res.set_header("Vary", "Origin");
+      res.set_header("Access-Control-Expose-Headers", "Location, Preference-Applied, Content-Length");
+    }
+    const std::string allow = AllowedMethods(req.path);
+    if (allow.empty()) return false;  // 404 from the router
+    if (req.method == "OPTIONS") {
+      res.status = 204;
+      res.set_header("Allow", allow);
+      if (allowed_origin && req.has_header("Access-Control-Request-Method")) {
+        res.set_header("Access-Control-Allow-Methods", allow);
+        res.set_header("Access-Control-Allow-Headers",
+                       "Authorization, Content-Type, Idempotency-Key, Prefer, Cache-Control, Last-Event-ID");
+        res.set_header("Access-Control-Max-Age", "600");
+      }
+      return true;
+    }
+    const bool listed = (", " + allow + ",").find(", " + req.method + ",") != std::string::npos;
+    if (listed) return false;
+    res.set_header("Allow", allow);
+    SendProblem(res, {405, {{"type", ProblemTypeUri("method-not-allowed")}, {"title", "Method Not Allowed"},
+                            {"status", 405}, {"detail", req.method + " " + req.path + ": allowed: " + allow}}});
+    return true;
   }
 
   void Hooks() {
@@ -250,7 +329,8 @@ struct ApiServer::Impl {
       return httplib::Server::HandlerResponse::Handled;
     }));
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-      if (options.token.empty() || req.path == "/health") return httplib::Server::HandlerResponse::Unhandled;
+      if (AnswerCorsAndMethods(req, res)) return httplib::Server::HandlerResponse::Handled;
+      if (options.token.empty() || IsPublicPage(req.path)) return httplib::Server::HandlerResponse::Unhandled;
       const std::string auth = req.get_header_value("Authorization");
       const std::string prefix = "Bearer ";
       if (auth.rfind(prefix, 0) == 0 && ConstantTimeEquals(auth.substr(prefix.size()), options.token))
@@ -270,6 +350,13 @@ ApiServer::ApiServer(const ServerOptions& options, JobExecutor* executor)
   const std::string proto = options.proto_dir.empty() ? SATMESH_PROTO_DIR : options.proto_dir;
   impl_->job_schema = ReadJsonFile(proto + "/job.schema.json");
   impl_->openapi = ReadJsonFile(proto + "/openapi.json");
+  impl_->viewer_dir = options.viewer_dir.empty() ? SATMESH_VIEWER_DIR : options.viewer_dir;
+  std::ifstream page(impl_->viewer_dir + "/viewer.html");
+  SATMESH_CHECK(page.good() && fs::exists(impl_->viewer_dir + "/Cesium/Cesium.js"), ErrorCode::kNotFound,
+                "viewer_dir: '" + impl_->viewer_dir + "' has no viewer.html and Cesium/Cesium.js");
+  std::ostringstream text;
+  text << page.rdbuf();
+  impl_->viewer_page = text.str();
 }
 
 ApiServer::~ApiServer() { Stop(); }

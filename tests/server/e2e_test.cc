@@ -63,6 +63,24 @@ TEST(EndToEnd, SmallSyntheticSceneOverHttpMatchesInProcess) {
   EXPECT_EQ(c.Get(results["mesh"]["href"].get<std::string>().c_str())->status, 200);
   const json tileset = Json(c.Get(results["tileset"]["href"].get<std::string>().c_str()));
   EXPECT_EQ(tileset["asset"]["version"], "1.1");
+  // The viewer's live tileset: every finished tile, as the assembled one.
+  const json live = Json(c.Get(("/jobs/" + id + "/tileset.json").c_str()));
+  EXPECT_EQ(live["extras"]["status"], "successful");
+  EXPECT_EQ(live["root"]["children"].size(), tileset["root"]["children"].size());
+  EXPECT_EQ(live["extras"]["tiles_done"], results["tiles"].size());
+  for (size_t k = 0; k < 6; ++k)
+    EXPECT_DOUBLE_EQ(live["root"]["boundingVolume"]["region"][k].get<double>(),
+                     tileset["root"]["boundingVolume"]["region"][k].get<double>());
+  // Every CRS is checked at submission, naming its field.
+  for (const char* field : {"outputs", "aoi"}) {
+    json bad = job;
+    if (std::string(field) == "outputs") bad["outputs"]["crs"] = "EPSG:99999999";
+    else bad["aoi"] = {{"bbox", {0, 0, 1, 1}}, {"crs", "EPSG:99999999"}};
+    auto refused = c.Post("/processes/refine-mesh/execution", bad.dump(), "application/json");
+    EXPECT_EQ(refused->status, 400) << refused->body;
+    EXPECT_NE(Json(refused)["detail"].get<std::string>().find(std::string(field) + ".crs: 'EPSG:99999999'"),
+              std::string::npos) << refused->body;
+  }
   const json served = results["metrics"]["value"];
 
   // The same job in-process (the CLI's path).
