@@ -108,5 +108,72 @@ TEST(EndToEnd, SmallSyntheticSceneOverHttpMatchesInProcess) {
   server.Stop();
 }
 
+TEST(EndToEnd, MultiTileMetricsAreFilledAsInProcess) {
+  const std::string dir = TempDir("e2e_tiles");
+  const std::string scene = dir + "/scene";
+  synth::SynthOptions synth_options = synth::SynthPreset("small", /*seed=*/2);
+  synth_options.write_preview = false;
+  synth::GenerateScene(scene, synth_options);
+  json job = ReadJsonFile(scene + "/job.json");
+  job["options"]["iterations_per_level"] = 3;
+  job["tiling"] = {{"size_m", 40}, {"overlap_m", 8}};  // 72 m scene: 2 x 2 tiles
+
+  RealExecutor executor;
+  ServerOptions options;
+  options.port = 0;
+  options.data_dir = dir + "/data";
+  options.inputs.data_roots = {scene};
+  options.scheduler.workers = 2;
+  ApiServer server(options, &executor);
+  httplib::Client c("127.0.0.1", server.Start());
+  c.set_read_timeout(30, 0);
+  auto r = c.Post("/processes/refine-mesh/execution", json{{"inputs", {{"job", job}}}}.dump(), "application/json");
+  ASSERT_EQ(r->status, 201) << r->body;
+  const std::string id = Json(r)["jobID"];
+  json info;
+  for (int i = 0; i < 3000; ++i) {
+    info = Json(c.Get(("/jobs/" + id).c_str()));
+    if (info["status"] != "accepted" && info["status"] != "running") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_EQ(info["status"], "successful") << info.dump();
+  const json served = Json(c.Get(("/jobs/" + id + "/results").c_str()))["metrics"]["value"];
+  ASSERT_EQ(served["tiles"].size(), 4u);
+
+  // The job-level summary over the tiles: filled, and consistent with the tiles.
+  EXPECT_NEAR(served["gsd_m"].get<double>(), 0.30, 0.01);
+  EXPECT_EQ(served["views"].size(), 3u);
+  ASSERT_FALSE(served["pairs"].empty());
+  for (const auto& p : served["pairs"]) EXPECT_GE(p["tiles"].get<int>(), 1);
+  ASSERT_FALSE(served["levels"].empty());
+  const json& finest = served["levels"].back();
+  EXPECT_EQ(finest["level"], 0);
+  int faces = 0;
+  double zncc_min = 1, zncc_max = -1;
+  for (const auto& t : served["tiles"]) {
+    faces += t["levels"].back()["faces"].get<int>();
+    zncc_min = std::min(zncc_min, t["levels"].back()["mean_zncc_end"].get<double>());
+    zncc_max = std::max(zncc_max, t["levels"].back()["mean_zncc_end"].get<double>());
+  }
+  EXPECT_EQ(finest["faces"], faces);
+  EXPECT_GE(finest["mean_zncc_end"].get<double>(), zncc_min - 1e-9);  // a weighted mean of the tiles'
+  EXPECT_LE(finest["mean_zncc_end"].get<double>(), zncc_max + 1e-9);
+  EXPECT_GT(served["time_s"]["total"].get<double>(), 0.1);
+  EXPECT_GT(served["totals"]["peak_rss_mb"].get<double>(), 10.0);
+
+  // In-process (the CLI's path): the same summary.
+  const JobOutputs local = RunJob(proto::JobSpecFromJson(job, scene), dir + "/local");
+  const json expected = proto::JobMetricsToJson(local);
+  EXPECT_EQ(served["views"], expected["views"]);
+  EXPECT_NEAR(served["gsd_m"].get<double>(), expected["gsd_m"].get<double>(), 1e-9);
+  EXPECT_EQ(served["pairs"].size(), expected["pairs"].size());
+  ASSERT_EQ(served["levels"].size(), expected["levels"].size());
+  EXPECT_EQ(served["levels"].back()["faces"], expected["levels"].back()["faces"]);
+  EXPECT_NEAR(served["levels"].back()["mean_zncc_end"].get<double>(),
+              expected["levels"].back()["mean_zncc_end"].get<double>(), 1e-4);
+  EXPECT_GT(expected["totals"]["peak_rss_mb"].get<double>(), 10.0);
+  server.Stop();
+}
+
 }  // namespace
 }  // namespace satmesh::server::testing
