@@ -6,6 +6,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <regex>
 #include <thread>
@@ -21,7 +22,10 @@ using nlohmann::json;
 
 namespace {
 
-void SendJson(httplib::Response& res, const json& body, int status = 200) {
+void MakeLinksAbsolute(const httplib::Request& req, json* body);
+
+void SendJson(const httplib::Request& req, httplib::Response& res, json body, int status = 200) {
+  MakeLinksAbsolute(req, &body);
   res.status = status;
   res.set_content(body.dump(), "application/json");
 }
@@ -71,6 +75,31 @@ std::string AllowedMethods(const std::string& path) {
 bool IsPublicPage(const std::string& path) {
   static const std::regex viewer(R"(/jobs/[^/]+/viewer)");
   return path == "/health" || path.rfind("/viewer/", 0) == 0 || std::regex_match(path, viewer);
+}
+
+// Links of JSON documents as absolute URLs (OGC API clients such as OWSLib follow them
+// as they are), from the request's Host (and X-Forwarded-Proto behind a proxy).
+void MakeLinksAbsolute(const httplib::Request& req, json* body) {
+  if (!req.has_header("Host")) return;
+  const std::string proto = req.has_header("X-Forwarded-Proto") ? req.get_header_value("X-Forwarded-Proto") : "http";
+  const std::string base = proto + "://" + req.get_header_value("Host");
+  const std::function<void(json&)> visit = [&](json& j) {
+    if (j.is_array()) {
+      for (auto& e : j) visit(e);
+    } else if (j.is_object()) {
+      for (auto& [key, value] : j.items()) {
+        if (key == "links" && value.is_array()) {
+          for (auto& link : value)
+            if (link.is_object() && link.contains("href") && link["href"].is_string() &&
+                link["href"].get<std::string>().rfind("/", 0) == 0)
+              link["href"] = base + link["href"].get<std::string>();
+        } else if (key != "schema") {  // the process description's job schema: as it is
+          visit(value);
+        }
+      }
+    }
+  };
+  visit(*body);
 }
 
 [[noreturn]] void NoSuchJob(const std::string& id) {
@@ -146,10 +175,10 @@ struct ApiServer::Impl {
       throw HttpError(422, "idempotency-key-reused", "Idempotency-Key '" + key + "' was used for a different job");
     res.set_header("Location", "/jobs/" + record.id);
     res.set_header("Preference-Applied", "respond-async");
-    SendJson(res, StatusInfo(record), created ? 201 : 200);
+    SendJson(req, res, StatusInfo(record), created ? 201 : 200);
   }
 
-  void Results(const std::string& id, httplib::Response& res) const {
+  void Results(const httplib::Request& req, const std::string& id, httplib::Response& res) const {
     const JobRecord job = RequireJob(id);
     if (job.status == JobStatus::kAccepted || job.status == JobStatus::kRunning)
       throw HttpError(404, "result-not-ready", "job '" + id + "' is " + JobStatusName(job.status));
@@ -168,7 +197,7 @@ struct ApiServer::Impl {
     if (fs::exists(dir / "metrics.json")) out["metrics"]["value"] = ReadJsonFile((dir / "metrics.json").string());
     out["tiles"] = TileList(job)["tiles"];
     out["links"] = links;
-    SendJson(res, out);
+    SendJson(req, res, out);
   }
 
   void Stream(const std::string& id, httplib::Response& res) {
@@ -190,25 +219,25 @@ struct ApiServer::Impl {
   }
 
   void Routes() {
-    http.Get("/", [](const auto&, auto& res) { SendJson(res, LandingPage()); });
-    http.Get("/conformance", [](const auto&, auto& res) { SendJson(res, Conformance()); });
-    http.Get("/api", [this](const auto&, auto& res) { SendJson(res, openapi); });
-    http.Get("/health", [this](const auto&, auto& res) {
+    http.Get("/", [](const auto& req, auto& res) { SendJson(req, res, LandingPage()); });
+    http.Get("/conformance", [](const auto& req, auto& res) { SendJson(req, res, Conformance()); });
+    http.Get("/api", [this](const auto& req, auto& res) { SendJson(req, res, openapi); });
+    http.Get("/health", [this](const auto& req, auto& res) {
       const auto s = scheduler.Stats();
-      SendJson(res, {{"status", "ok"}, {"workers", options.scheduler.workers},
+      SendJson(req, res, {{"status", "ok"}, {"workers", options.scheduler.workers},
                      {"tiles_queued", s.tiles_queued}, {"tiles_running", s.tiles_running}});
     });
-    http.Get("/metrics", [this](const auto&, auto& res) {
+    http.Get("/metrics", [this](const auto& req, auto& res) {
       res.set_content(PrometheusText(scheduler.Stats()), "text/plain; version=0.0.4");
     });
-    http.Get("/processes", [](const auto&, auto& res) {
-      SendJson(res, {{"processes", json::array({ProcessSummary()})},
+    http.Get("/processes", [](const auto& req, auto& res) {
+      SendJson(req, res, {{"processes", json::array({ProcessSummary()})},
                      {"links", json::array({{{"href", "/processes"}, {"rel", "self"}}})}});
     });
     http.Get(R"(/processes/([^/]+))", [this](const auto& req, auto& res) {
       if (req.matches[1] != kProcessId)
         throw HttpError(404, "no-such-process", "no process '" + std::string(req.matches[1]) + "'");
-      SendJson(res, ProcessDescription(job_schema));
+      SendJson(req, res, ProcessDescription(job_schema));
     });
     http.Post(R"(/processes/([^/]+)/execution)", [this](const auto& req, auto& res) {
       if (req.matches[1] != kProcessId)
@@ -227,18 +256,18 @@ struct ApiServer::Impl {
       }
       json jobs = json::array();
       for (const auto& job : scheduler.List(status, limit)) jobs.push_back(StatusInfo(job));
-      SendJson(res, {{"jobs", jobs}, {"links", json::array({{{"href", "/jobs"}, {"rel", "self"}}})}});
+      SendJson(req, res, {{"jobs", jobs}, {"links", json::array({{{"href", "/jobs"}, {"rel", "self"}}})}});
     });
     http.Get(R"(/jobs/([^/]+))", [this](const auto& req, auto& res) {
-      SendJson(res, StatusInfo(RequireJob(req.matches[1])));
+      SendJson(req, res, StatusInfo(RequireJob(req.matches[1])));
     });
     http.Delete(R"(/jobs/([^/]+))", [this](const auto& req, auto& res) {
       const auto job = scheduler.Dismiss(req.matches[1]);
       if (!job) NoSuchJob(req.matches[1]);
-      SendJson(res, StatusInfo(*job));
+      SendJson(req, res, StatusInfo(*job));
     });
     http.Get(R"(/jobs/([^/]+)/tiles)", [this](const auto& req, auto& res) {
-      SendJson(res, TileList(RequireJob(req.matches[1])));
+      SendJson(req, res, TileList(RequireJob(req.matches[1])));
     });
     http.Get(R"(/jobs/([^/]+)(?:/results)?/tiles/(\d{1,6})_(\d{1,6})\.glb)", [this](const auto& req, auto& res) {
       const JobRecord job = RequireJob(req.matches[1]);
@@ -251,7 +280,7 @@ struct ApiServer::Impl {
       }
       throw HttpError(404, "no-such-tile", "job '" + job.id + "' has no tile " + key.Name());
     });
-    http.Get(R"(/jobs/([^/]+)/results)", [this](const auto& req, auto& res) { Results(req.matches[1], res); });
+    http.Get(R"(/jobs/([^/]+)/results)", [this](const auto& req, auto& res) { Results(req, req.matches[1], res); });
     http.Get(R"(/jobs/([^/]+)/results/(tileset\.json|metrics\.json|mesh\.ply|dsm\.tif))",
              [this](const auto& req, auto& res) {
                const JobRecord job = RequireJob(req.matches[1]);
@@ -266,7 +295,7 @@ struct ApiServer::Impl {
       const JobRecord job = RequireJob(req.matches[1]);
       if (job.status == JobStatus::kDismissed) throw HttpError(410, "job-dismissed", "job '" + job.id + "' was dismissed");
       res.set_header("Cache-Control", "no-cache");
-      SendJson(res, LiveTileset(job));
+      SendJson(req, res, LiveTileset(job));
     });
     http.Get(R"(/jobs/([^/]+)/viewer)", [this](const auto& req, auto& res) {
       RequireJob(req.matches[1]);

@@ -22,6 +22,10 @@ TEST(Api, LandingConformanceAndProcessDescription) {
   EXPECT_TRUE(d["inputs"]["job"]["schema"]["properties"].contains("images"));
   EXPECT_EQ(Json(c.Get("/api"))["openapi"], "3.0.3");
   EXPECT_EQ(Json(c.Get("/health"))["status"], "ok");
+  // Links are absolute, from the request's Host (OWSLib follows them as they are).
+  const std::string base = "http://127.0.0.1:" + std::to_string(s.port);
+  for (const auto& link : Json(c.Get("/"))["links"]) EXPECT_EQ(link["href"].get<std::string>().rfind(base + "/", 0), 0u) << link;
+  EXPECT_EQ(Json(c.Get("/processes/refine-mesh"))["links"][0]["href"], base + "/processes/refine-mesh");
 }
 
 TEST(Api, CorsPreflightAndHeadersForAllowedOriginsOnly) {
