@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "core/common/error.h"
+#include "proto/job_pictures.h"
 #include "proto/job_spec_json.h"
 
 namespace satmesh::cli {
@@ -70,9 +71,11 @@ JobOutputs RunJobFile(const std::string& job_path, const std::string& out_dir,
   };
   JobOutputs outputs = RunJob(spec, out_dir, progress);
   proto::WriteJobJson(outputs, out_dir);
+  proto::WriteJobPictures(proto::JobMetricsToJson(outputs), out_dir);
   WriteViewer(out_dir);
-  spdlog::info("wrote {}, {}, {}/tileset.json, {}/metrics.json, {}/tiles/", outputs.mesh_path,
-               outputs.dsm_path, out_dir, out_dir, out_dir);
+  spdlog::info("wrote {}, {}, {}/tileset.json, {}/metrics.json, {}/tiles/, {}/preview.png (hillshade), "
+               "{}/convergence.png (ZNCC per iteration)", outputs.mesh_path, outputs.dsm_path, out_dir,
+               out_dir, out_dir, out_dir, out_dir);
   return outputs;
 }
 

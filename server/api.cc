@@ -46,6 +46,7 @@ std::string ContentType(const std::string& file) {
   if (ext == ".glb") return "model/gltf-binary";
   if (ext == ".json") return "application/json";
   if (ext == ".tif") return "image/tiff";
+  if (ext == ".png") return "image/png";
   return "application/octet-stream";
 }
 
@@ -188,7 +189,7 @@ struct ApiServer::Impl {
     const std::string base = "/jobs/" + id + "/results/";
     json links = json::array();
     json out = {{"jobID", id}};
-    for (const char* file : {"tileset.json", "metrics.json", "mesh.ply", "dsm.tif"}) {
+    for (const char* file : {"tileset.json", "metrics.json", "mesh.ply", "dsm.tif", "preview.png", "convergence.png"}) {
       if (!fs::exists(dir / file)) continue;
       const std::string name = fs::path(file).stem().string();
       out[name] = {{"href", base + file}, {"type", ContentType(file)}};
@@ -281,7 +282,7 @@ struct ApiServer::Impl {
       throw HttpError(404, "no-such-tile", "job '" + job.id + "' has no tile " + key.Name());
     });
     http.Get(R"(/jobs/([^/]+)/results)", [this](const auto& req, auto& res) { Results(req, req.matches[1], res); });
-    http.Get(R"(/jobs/([^/]+)/results/(tileset\.json|metrics\.json|mesh\.ply|dsm\.tif))",
+    http.Get(R"(/jobs/([^/]+)/results/(tileset\.json|metrics\.json|mesh\.ply|dsm\.tif|preview\.png|convergence\.png))",
              [this](const auto& req, auto& res) {
                const JobRecord job = RequireJob(req.matches[1]);
                if (job.status != JobStatus::kSuccessful)

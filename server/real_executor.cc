@@ -10,6 +10,7 @@
 #include "core/image/image_io.h"
 #include "core/mesh/mesh_io.h"
 #include "core/tiling/job.h"
+#include "proto/job_pictures.h"
 #include "proto/job_spec_json.h"
 #include "server/api_documents.h"
 
@@ -120,6 +121,7 @@ json RealExecutor::Assemble(const JobSpec& spec, const std::vector<TileKey>& til
   WriteFileAtomic((fs::path(job_dir) / "tileset.json").string(),
                   proto::TilesetToJson(outputs.assembly.tileset).dump(2));
   WriteFileAtomic((fs::path(job_dir) / "metrics.json").string(), metrics.dump(2));
+  proto::WriteJobPictures(metrics, job_dir);
   return metrics;
 }
 

@@ -61,6 +61,14 @@ TEST(EndToEnd, SmallSyntheticSceneOverHttpMatchesInProcess) {
     EXPECT_GT(ReadMesh(dir + "/tile.glb").num_faces(), 100u);
   }
   EXPECT_EQ(c.Get(results["mesh"]["href"].get<std::string>().c_str())->status, 200);
+  // The pictures: a hillshade preview and the convergence plot, as PNG.
+  for (const char* picture : {"preview", "convergence"}) {
+    ASSERT_TRUE(results.contains(picture)) << results.dump();
+    auto png = c.Get(results[picture]["href"].get<std::string>().c_str());
+    ASSERT_EQ(png->status, 200) << picture;
+    EXPECT_EQ(png->get_header_value("Content-Type"), "image/png");
+    EXPECT_EQ(png->body.substr(1, 3), "PNG");
+  }
   const json tileset = Json(c.Get(results["tileset"]["href"].get<std::string>().c_str()));
   EXPECT_EQ(tileset["asset"]["version"], "1.1");
   // The viewer's live tileset: every finished tile, as the assembled one.
