@@ -150,6 +150,63 @@ void WriteHeightErrorMapsPng(const std::string& path, const std::vector<TitledDs
   WritePng(path, image);
 }
 
+void WritePointMapsPng(const std::string& path, const std::vector<PointPanel>& panels,
+                       const std::array<double, 4>& extent, double max_value, const std::string& caption) {
+  const double ex = extent[2] - extent[0], ey = extent[3] - extent[1];
+  SATMESH_CHECK(ex > 0 && ey > 0 && max_value > 0 && !panels.empty(), ErrorCode::kInvalidArgument,
+                "point map '" + path + "': empty extent, no panel or max_value <= 0");
+  cv::Mat lut(1, 256, CV_8UC1);
+  for (int i = 0; i < 256; ++i) lut.at<uchar>(0, i) = uchar(i);
+  cv::applyColorMap(lut, lut, cv::COLORMAP_VIRIDIS);  // 1 x 256 BGR
+  const auto color = [&](double v) {
+    const cv::Vec3b c = lut.at<cv::Vec3b>(0, int(std::clamp(v / max_value, 0.0, 1.0) * 255));
+    return cv::Scalar(c[0], c[1], c[2]);
+  };
+  const double scale = 640.0 / std::max(ex, ey);
+  const int pw = int(ex * scale), ph = int(ey * scale), margin = 20, title_h = 34, legend_h = 70;
+  cv::Mat image(title_h + ph + legend_h + margin, margin + int(panels.size()) * (pw + margin), CV_8UC3, kBackground);
+  for (size_t k = 0; k < panels.size(); ++k) {
+    const PointPanel& p = panels[k];
+    SATMESH_CHECK(p.xy.size() == p.values.size(), ErrorCode::kInvalidArgument,
+                  "point map '" + p.title + "': " + std::to_string(p.values.size()) + " values for " +
+                      std::to_string(p.xy.size()) + " points");
+    const int x0 = margin + int(k) * (pw + margin);
+    cv::rectangle(image, cv::Rect(x0, title_h, pw, ph), cv::Scalar(235, 235, 235), cv::FILLED);
+    // Points falling on the same 3 x 3 px cell (a wall seen from above) show their mean.
+    constexpr int kCell = 3;
+    const int cw = pw / kCell + 1, ch = ph / kCell + 1;
+    std::vector<double> sum(size_t(cw) * ch, 0.0);
+    std::vector<int> count(sum.size(), 0);
+    for (size_t i = 0; i < p.xy.size(); ++i) {
+      if (!std::isfinite(p.values[i])) continue;
+      const int cx = int((p.xy[i].x() - extent[0]) * scale) / kCell, cy = int((extent[3] - p.xy[i].y()) * scale) / kCell;
+      if (cx < 0 || cy < 0 || cx >= cw || cy >= ch) continue;
+      sum[size_t(cy) * cw + cx] += std::min<double>(p.values[i], max_value);
+      ++count[size_t(cy) * cw + cx];
+    }
+    for (int cy = 0; cy < ch; ++cy)
+      for (int cx = 0; cx < cw; ++cx) {
+        const size_t c = size_t(cy) * cw + cx;
+        if (count[c] == 0) continue;
+        const cv::Rect cell(x0 + cx * kCell, title_h + cy * kCell, kCell, kCell);
+        cv::rectangle(image, cell & cv::Rect(x0, title_h, pw, ph), color(sum[c] / count[c]), cv::FILLED);
+      }
+    Text(image, p.title, cv::Point(x0, title_h - 10), 0.55);
+  }
+  const int bar_w = std::min(image.cols - 2 * margin, 480), bar_x = (image.cols - bar_w) / 2;
+  const int bar_y = title_h + ph + 14;
+  for (int x = 0; x < bar_w; ++x)
+    cv::line(image, cv::Point(bar_x + x, bar_y), cv::Point(bar_x + x, bar_y + 14), color(max_value * x / (bar_w - 1)), 1);
+  for (int t = 0; t <= 4; ++t) {
+    const int x = bar_x + t * (bar_w - 1) / 4;
+    const std::string label = Format("%.2g", max_value * t / 4.0) + (t == 4 ? "+" : "");
+    cv::line(image, cv::Point(x, bar_y + 14), cv::Point(x, bar_y + 19), kInk, 1);
+    Text(image, label, cv::Point(x - TextWidth(label, 0.45) / 2, bar_y + 34), 0.45);
+  }
+  Text(image, caption, cv::Point(bar_x + bar_w / 2 - TextWidth(caption, 0.45) / 2, bar_y + 52), 0.45);
+  WritePng(path, image);
+}
+
 void WriteLinePlotPng(const std::string& path, const std::vector<PlotSeries>& series,
                       const std::string& title, const std::string& x_label, const std::string& y_label) {
   double y0 = INFINITY, y1 = -INFINITY;

@@ -1,6 +1,8 @@
 #pragma once
 // Pictures of results as PNG (OpenCV): a DSM's hillshade, maps of height errors against a
 // truth, line plots (ZNCC per iteration). For people to look at; nothing reads them back.
+#include <Eigen/Core>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -33,6 +35,21 @@ struct TitledDsm {
 // is not on the truth's grid or range_m <= 0, Error{kIo} when the file cannot be written.
 void WriteHeightErrorMapsPng(const std::string& path, const std::vector<TitledDsm>& surfaces,
                              const Dsm& truth, double range_m);
+
+// Values at points seen from above (e.g. facade samples' distance to a surface).
+struct PointPanel {
+  std::string title;
+  std::vector<Eigen::Vector2d> xy;  // x east, y north, in the extent's frame
+  std::vector<float> values;        // one per point; NaN not drawn
+};
+
+// One panel per point set, side by side over the same extent (xmin, ymin, xmax, ymax),
+// each point a dot coloured by value on one scale [0, max_value] (viridis; larger values
+// drawn on top), one legend below with `caption`. Throws Error{kInvalidArgument} for an
+// empty extent, max_value <= 0 or values not matching the points, Error{kIo} when the
+// file cannot be written.
+void WritePointMapsPng(const std::string& path, const std::vector<PointPanel>& panels,
+                       const std::array<double, 4>& extent, double max_value, const std::string& caption);
 
 struct PlotSeries {
   std::string name;        // legend entry
