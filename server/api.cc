@@ -302,6 +302,9 @@ struct ApiServer::Impl {
       RequireJob(req.matches[1]);
       res.set_content(viewer_page, "text/html; charset=utf-8");
     });
+    // CesiumJS's scripts as a JavaScript MIME type httplib does not compress: it would
+    // Brotli-compress every request at quality 11 (Cesium.js: 11 s instead of 0.04 s).
+    http.set_file_extension_and_mimetype_mapping("js", "application/x-javascript");
     SATMESH_CHECK(http.set_mount_point("/viewer/Cesium", viewer_dir + "/Cesium"), ErrorCode::kIo,
                   "viewer: cannot serve '" + viewer_dir + "/Cesium'");
   }

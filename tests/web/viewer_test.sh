@@ -36,14 +36,19 @@ trap cleanup EXIT
 tiling=(--set tiling.size_m=40 --set tiling.overlap_m=8 --set iterations_per_level=4)
 
 # 1. The server's page.
-"$server" --port 0 --data-dir "$work/data" --data-root "$work/scene" --workers 2 >"$work/server.out" 2>"$work/server.log" &
+"$server" --port 0 --data-dir "$work/data" --data-root "$work/scene" --workers 1 >"$work/server.out" 2>"$work/server.log" &
 server_pid=$!
 for _ in $(seq 100); do grep -q "listening on port" "$work/server.out" 2>/dev/null && break; sleep 0.1; done
 port=$(sed -n 's/^listening on port \([0-9]*\)$/\1/p' "$work/server.out")
 [ -n "$port" ] || { cat "$work/server.log"; echo "FAIL: the server did not start"; exit 1; }
-id=$("$satmesh" submit "$work/scene/job.json" --server "http://127.0.0.1:$port" --wait --quiet "${tiling[@]}")
-echo "job $id successful on port $port"
-node "$web/tools/viewer-check.mjs" "http://127.0.0.1:$port/jobs/$id/viewer" 4 "$shots/server.png"
+# The page opened while the job runs (one worker, 20 iterations a level: some seconds a
+# tile): tiles appear as they finish; the states it went through are printed.
+id=$("$satmesh" submit "$work/scene/job.json" --server "http://127.0.0.1:$port" --set tiling.size_m=40 \
+     --set tiling.overlap_m=8)
+echo "job $id submitted on port $port"
+node "$web/tools/viewer-check.mjs" "http://127.0.0.1:$port/jobs/$id/viewer" 4 "$shots/server.png" | tee "$work/check.json"
+grep -qE '"[0-9.]+s running [123]/4"' "$work/check.json" && echo "tiles appeared while the job ran" \
+  || echo "note: the job finished before the page showed a partial state"
 
 # 2. The page `satmesh refine` writes, through a static file server.
 "$satmesh" refine "$work/scene/job.json" --out "$work/out" "${tiling[@]}" >/dev/null 2>&1

@@ -35,11 +35,25 @@ try {
     offOrigin.push(u);
     r.abort();
   });
+  // Every status the page shows, in order (tiles appearing while the job runs).
+  await page.evaluateOnNewDocument(() => {
+    window.__states = [];
+    const t0 = performance.now();
+    document.addEventListener('DOMContentLoaded', () => {
+      const el = document.getElementById('status');
+      new MutationObserver(() => {
+        const s = `${el.dataset.state} ${el.dataset.tilesLoaded}/${el.dataset.tilesTotal}`;
+        if (window.__states[window.__states.length - 1]?.s !== s)
+          window.__states.push({ s, t: ((performance.now() - t0) / 1000).toFixed(1) });
+      }).observe(el, { attributes: true, childList: true, subtree: true, characterData: true });
+    });
+  });
   const t0 = Date.now();
   await page.goto(url + '#color=shaded', { waitUntil: 'load' });
   await page.waitForFunction(() => ['ready', 'error'].includes(document.getElementById('status').dataset.state),
                              { timeout: 240000, polling: 250 });
   result.load_s = (Date.now() - t0) / 1000;
+  result.states = (await page.evaluate(() => window.__states)).map((e) => `${e.t}s ${e.s}`);
   const status = await page.$eval('#status', (e) => ({ ...e.dataset, text: e.textContent }));
   result.state = status.state;
   result.tiles_loaded = Number(status.tilesLoaded);
