@@ -7,16 +7,20 @@
 #     the binaries for the job viewer; with the test tools also glTF-Validator and
 #     puppeteer-core). Skipped when web/node_modules already matches the lock file.
 # Needs Debian's archive and the npm registry; nothing is fetched at build or run time.
-#   scripts/install-deps.sh [--no-test-tools]
+# --only debian|web does one of the two steps (the Dockerfile caches them as two layers).
+#   scripts/install-deps.sh [--no-test-tools] [--only debian|web]
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
-test_tools=1
-for arg in "$@"; do
-  case "$arg" in
-    --no-test-tools) test_tools=0 ;;
-    *) echo "usage: scripts/install-deps.sh [--no-test-tools]" >&2; exit 2 ;;
+test_tools=1 only=""
+usage() { echo "usage: scripts/install-deps.sh [--no-test-tools] [--only debian|web]" >&2; exit 2; }
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --no-test-tools) test_tools=0; shift ;;
+    --only) [ "${2:-}" = debian ] || [ "${2:-}" = web ] || usage; only="$2"; shift 2 ;;
+    *) usage ;;
   esac
 done
+if [ "$only" != web ]; then
 lists=("$here/docker/deps-debian12.txt")
 [ "$test_tools" = 1 ] && lists+=("$here/docker/deps-debian12-test.txt")
 pkgs=$(cat "${lists[@]}" | sed 's/#.*//' | grep -v '^\s*$' | tr '\n' ' ')
@@ -36,6 +40,8 @@ else
   $SUDO apt-get update -qq
   $SUDO apt-get install -y -qq --no-install-recommends $missing
 fi
+fi
+[ "$only" = debian ] && exit 0
 
 web="$here/web"
 stamp="$web/node_modules/.satmesh-installed"
