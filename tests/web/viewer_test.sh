@@ -53,6 +53,9 @@ grep -qE '"[0-9.]+s running [123]/4"' "$work/check.json" && echo "tiles appeared
 # 2. The page `satmesh refine` writes, through a static file server.
 "$satmesh" refine "$work/scene/job.json" --out "$work/out" "${tiling[@]}" >/dev/null 2>&1
 [ -f "$work/out/viewer.html" ] && [ -f "$work/out/Cesium/Cesium.js" ] || { echo "FAIL: refine wrote no viewer"; exit 1; }
+for png in preview convergence; do
+  [ "$(head -c 4 "$work/out/$png.png" | tail -c 3)" = PNG ] || { echo "FAIL: refine wrote no $png.png"; exit 1; }
+done
 if ! command -v python3 >/dev/null; then
   echo "note: no python3 for a static file server: the static page is not checked"
   exit 0
