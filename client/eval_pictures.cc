@@ -26,15 +26,17 @@ std::string Title(const char* what, const DsmMetrics& m) {
 
 }  // namespace
 
-std::vector<std::string> WriteEvalPictures(const std::string& scene_dir, const std::string& result_path,
-                                           const SceneEvaluation& evaluation, const std::string& out_dir,
-                                           double range_m) {
+std::vector<std::string> WriteEvalPictures(const std::string& scene_dir,
+                                           const std::string& result_path,
+                                           const SceneEvaluation& evaluation,
+                                           const std::string& out_dir, double range_m) {
   fs::create_directories(out_dir);
   std::vector<std::string> written;
   const ScenePaths paths = SceneLayout(scene_dir);
   const Dsm truth = ReadDsm(paths.truth_dsm);
   const Dsm initial = ReadDsm(paths.initial_dsm);
-  const std::string mesh_path = fs::is_directory(result_path) ? (fs::path(result_path) / "mesh.ply").string() : result_path;
+  const std::string mesh_path =
+      fs::is_directory(result_path) ? (fs::path(result_path) / "mesh.ply").string() : result_path;
   const Dsm refined = DsmFromMesh(ReadMesh(mesh_path), truth);
   const std::string errors = (fs::path(out_dir) / "height_error.png").string();
   WriteHeightErrorMapsPng(errors,
@@ -47,7 +49,8 @@ std::vector<std::string> WriteEvalPictures(const std::string& scene_dir, const s
     const TriangleMesh truth_mesh = ReadMesh(paths.truth_mesh);
     const SurfaceSamples samples = SampleSurface(truth_mesh);
     const auto& gt = truth.geo_transform;
-    const std::array<double, 4> extent = {gt[0], gt[3] + truth.height * gt[5], gt[0] + truth.width * gt[1], gt[3]};
+    const std::array<double, 4> extent = {gt[0], gt[3] + truth.height * gt[5],
+                                          gt[0] + truth.width * gt[1], gt[3]};
     std::vector<Eigen::Vector3d> facade;
     for (size_t i = 0; i < samples.points.size(); ++i) {
       const Eigen::Vector3d& p = samples.points[i];
@@ -69,18 +72,22 @@ std::vector<std::string> WriteEvalPictures(const std::string& scene_dir, const s
       return p;
     };
     const std::string facades = (fs::path(out_dir) / "facade_distance.png").string();
-    WritePointMapsPng(facades, {panel("initial DSM", MeshFromDsm(initial)), panel("refined", ReadMesh(mesh_path))},
-                      extent, max_m, "distance of the true facades to the surface (m), mean seen from above");
+    WritePointMapsPng(
+        facades,
+        {panel("initial DSM", MeshFromDsm(initial)), panel("refined", ReadMesh(mesh_path))}, extent,
+        max_m, "distance of the true facades to the surface (m), mean seen from above");
     written.push_back(facades);
   }
   const fs::path metrics_path = fs::path(result_path) / "metrics.json";
   if (fs::is_directory(result_path) && fs::exists(metrics_path)) {
     std::ifstream in(metrics_path);
     const auto metrics = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-    const auto series = metrics.is_discarded() ? std::vector<PlotSeries>{} : proto::ConvergenceSeries(metrics);
+    const auto series =
+        metrics.is_discarded() ? std::vector<PlotSeries>{} : proto::ConvergenceSeries(metrics);
     if (!series.empty()) {
       const std::string zncc = (fs::path(out_dir) / "zncc.png").string();
-      WriteLinePlotPng(zncc, series, "mean ZNCC per iteration, per level", "iteration", "mean ZNCC");
+      WriteLinePlotPng(zncc, series, "mean ZNCC per iteration, per level", "iteration",
+                       "mean ZNCC");
       written.push_back(zncc);
     }
   }

@@ -13,8 +13,9 @@ namespace satmesh::cli {
 // samples seen from above, coloured by their distance to the initial and to the result
 // surface (0-2 m, one scale); out_dir/zncc.png: the result's mean ZNCC per iteration
 // and level, when result_path is a directory with metrics.json. Returns the paths written.
-std::vector<std::string> WriteEvalPictures(const std::string& scene_dir, const std::string& result_path,
-                                           const SceneEvaluation& evaluation, const std::string& out_dir,
-                                           double range_m = 2.0);
+std::vector<std::string> WriteEvalPictures(const std::string& scene_dir,
+                                           const std::string& result_path,
+                                           const SceneEvaluation& evaluation,
+                                           const std::string& out_dir, double range_m = 2.0);
 
 }  // namespace satmesh::cli

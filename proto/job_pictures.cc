@@ -12,7 +12,8 @@ std::vector<PlotSeries> ConvergenceSeries(const nlohmann::json& metrics) {
   for (const auto& level : metrics.value("levels", nlohmann::json::array())) {
     PlotSeries s;
     char name[64];
-    std::snprintf(name, sizeof(name), "level %d, GSD %.2f m", level.value("level", 0), level.value("gsd_m", 0.0));
+    std::snprintf(name, sizeof(name), "level %d, GSD %.2f m", level.value("level", 0),
+                  level.value("gsd_m", 0.0));
     s.name = name;
     s.y = level.value("mean_zncc", std::vector<double>{});
     if (!s.y.empty()) series.push_back(s);
@@ -20,7 +21,8 @@ std::vector<PlotSeries> ConvergenceSeries(const nlohmann::json& metrics) {
   return series;
 }
 
-std::vector<std::string> WriteJobPictures(const nlohmann::json& metrics, const std::string& out_dir) {
+std::vector<std::string> WriteJobPictures(const nlohmann::json& metrics,
+                                          const std::string& out_dir) {
   namespace fs = std::filesystem;
   std::vector<std::string> written;
   const fs::path dsm = fs::path(out_dir) / "dsm.tif";

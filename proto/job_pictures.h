@@ -15,6 +15,7 @@ std::vector<PlotSeries> ConvergenceSeries(const nlohmann::json& metrics);
 
 // Writes out_dir/preview.png and out_dir/convergence.png (the latter only when a level has
 // a ZNCC); returns the names written. Throws Error naming the file on failure.
-std::vector<std::string> WriteJobPictures(const nlohmann::json& metrics, const std::string& out_dir);
+std::vector<std::string> WriteJobPictures(const nlohmann::json& metrics,
+                                          const std::string& out_dir);
 
 }  // namespace satmesh::proto

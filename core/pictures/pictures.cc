@@ -63,7 +63,8 @@ double TickStep(double span, int count) {
 
 std::string HillshadeOptions::Check() const {
   if (!(sun_azimuth_deg >= 0 && sun_azimuth_deg < 360)) return "sun_azimuth_deg: not in [0, 360)";
-  if (!(sun_elevation_deg > 0 && sun_elevation_deg <= 90)) return "sun_elevation_deg: not in (0, 90]";
+  if (!(sun_elevation_deg > 0 && sun_elevation_deg <= 90))
+    return "sun_elevation_deg: not in (0, 90]";
   if (!(z_factor > 0)) return "z_factor: must be > 0";
   if (max_size_px < 16) return "max_size_px: must be >= 16";
   return "";
@@ -84,11 +85,14 @@ void WriteHillshadePng(const std::string& path, const Dsm& dsm, const HillshadeO
       float z[3][3];
       bool valid = true;
       for (int b = 0; b < 3; ++b)
-        for (int a = 0; a < 3; ++a) valid = valid && std::isfinite(z[b][a] = dsm.at(i + a - 1, j + b - 1));
+        for (int a = 0; a < 3; ++a)
+          valid = valid && std::isfinite(z[b][a] = dsm.at(i + a - 1, j + b - 1));
       if (!valid) continue;
       // Horn's gradient, x east and y south (rows), as the aspect formula below takes it.
-      const double dzdx = ((z[0][2] + 2 * z[1][2] + z[2][2]) - (z[0][0] + 2 * z[1][0] + z[2][0])) / (8 * dx);
-      const double dzdy = ((z[2][0] + 2 * z[2][1] + z[2][2]) - (z[0][0] + 2 * z[0][1] + z[0][2])) / (8 * dy);
+      const double dzdx =
+          ((z[0][2] + 2 * z[1][2] + z[2][2]) - (z[0][0] + 2 * z[1][0] + z[2][0])) / (8 * dx);
+      const double dzdy =
+          ((z[2][0] + 2 * z[2][1] + z[2][2]) - (z[0][0] + 2 * z[0][1] + z[0][2])) / (8 * dy);
       const double slope = std::atan(options.z_factor * std::hypot(dzdx, dzdy));
       const double aspect = std::atan2(dzdy, -dzdx);
       const double shade = std::cos(zenith) * std::cos(slope) +
@@ -99,8 +103,10 @@ void WriteHillshadePng(const std::string& path, const Dsm& dsm, const HillshadeO
   }
   // Reduced to max_size_px, or enlarged (by a whole factor) to at least 512 px.
   const int longer = std::max(dsm.width, dsm.height);
-  const double scale = longer > options.max_size_px ? double(options.max_size_px) / longer
-                                                    : std::max(1.0, std::floor(std::min(512.0, double(options.max_size_px)) / longer));
+  const double scale =
+      longer > options.max_size_px
+          ? double(options.max_size_px) / longer
+          : std::max(1.0, std::floor(std::min(512.0, double(options.max_size_px)) / longer));
   if (scale < 1) cv::resize(image, image, cv::Size(), scale, scale, cv::INTER_AREA);
   if (scale > 1) cv::resize(image, image, cv::Size(), scale, scale, cv::INTER_NEAREST);
   WritePng(path, image);
@@ -109,24 +115,27 @@ void WriteHillshadePng(const std::string& path, const Dsm& dsm, const HillshadeO
 void WriteHeightErrorMapsPng(const std::string& path, const std::vector<TitledDsm>& surfaces,
                              const Dsm& truth, double range_m) {
   SATMESH_CHECK(range_m > 0, ErrorCode::kInvalidArgument, "height error map: range_m must be > 0");
-  SATMESH_CHECK(!surfaces.empty() && truth.width > 0 && truth.height > 0, ErrorCode::kInvalidArgument,
-                "height error map: no surface or an empty truth");
+  SATMESH_CHECK(!surfaces.empty() && truth.width > 0 && truth.height > 0,
+                ErrorCode::kInvalidArgument, "height error map: no surface or an empty truth");
   for (const auto& s : surfaces)
     SATMESH_CHECK(s.dsm && s.dsm->width == truth.width && s.dsm->height == truth.height,
-                  ErrorCode::kInvalidArgument, "height error map: '" + s.title + "' is not on the truth's grid");
+                  ErrorCode::kInvalidArgument,
+                  "height error map: '" + s.title + "' is not on the truth's grid");
   // Each panel at most 640 px wide; title above, one legend below all.
   const double scale = std::min(4.0, 640.0 / std::max(truth.width, truth.height));
   const int pw = std::max(1, int(truth.width * scale)), ph = std::max(1, int(truth.height * scale));
   const int margin = 20, title_h = 34, legend_h = 70;
-  cv::Mat image(title_h + ph + legend_h + margin, margin + int(surfaces.size()) * (pw + margin), CV_8UC3, kBackground);
+  cv::Mat image(title_h + ph + legend_h + margin, margin + int(surfaces.size()) * (pw + margin),
+                CV_8UC3, kBackground);
   for (size_t k = 0; k < surfaces.size(); ++k) {
     cv::Mat panel(truth.height, truth.width, CV_8UC3);
     for (int j = 0; j < truth.height; ++j)
       for (int i = 0; i < truth.width; ++i) {
         const float a = surfaces[k].dsm->at(i, j), t = truth.at(i, j);
-        panel.at<cv::Vec3b>(j, i) = std::isfinite(a) && std::isfinite(t)
-                                        ? Diverging((a - t) / range_m)
-                                        : cv::Vec3b(uchar(kNoData[0]), uchar(kNoData[1]), uchar(kNoData[2]));
+        panel.at<cv::Vec3b>(j, i) =
+            std::isfinite(a) && std::isfinite(t)
+                ? Diverging((a - t) / range_m)
+                : cv::Vec3b(uchar(kNoData[0]), uchar(kNoData[1]), uchar(kNoData[2]));
       }
     cv::resize(panel, panel, cv::Size(pw, ph), 0, 0, cv::INTER_NEAREST);
     const int x0 = margin + int(k) * (pw + margin);
@@ -143,15 +152,18 @@ void WriteHeightErrorMapsPng(const std::string& path, const std::vector<TitledDs
     const int x = bar_x + t * (bar_w - 1) / 4;
     const std::string label = Format("%+.2g", range_m * (t - 2) / 2.0);
     cv::line(image, cv::Point(x, bar_y + 14), cv::Point(x, bar_y + 19), kInk, 1);
-    Text(image, t == 2 ? "0" : label, cv::Point(x - TextWidth(t == 2 ? "0" : label, 0.45) / 2, bar_y + 34), 0.45);
+    Text(image, t == 2 ? "0" : label,
+         cv::Point(x - TextWidth(t == 2 ? "0" : label, 0.45) / 2, bar_y + 34), 0.45);
   }
   const std::string caption = "height - truth (m); grey: no data";
-  Text(image, caption, cv::Point(bar_x + bar_w / 2 - TextWidth(caption, 0.45) / 2, bar_y + 52), 0.45);
+  Text(image, caption, cv::Point(bar_x + bar_w / 2 - TextWidth(caption, 0.45) / 2, bar_y + 52),
+       0.45);
   WritePng(path, image);
 }
 
 void WritePointMapsPng(const std::string& path, const std::vector<PointPanel>& panels,
-                       const std::array<double, 4>& extent, double max_value, const std::string& caption) {
+                       const std::array<double, 4>& extent, double max_value,
+                       const std::string& caption) {
   const double ex = extent[2] - extent[0], ey = extent[3] - extent[1];
   SATMESH_CHECK(ex > 0 && ey > 0 && max_value > 0 && !panels.empty(), ErrorCode::kInvalidArgument,
                 "point map '" + path + "': empty extent, no panel or max_value <= 0");
@@ -164,12 +176,13 @@ void WritePointMapsPng(const std::string& path, const std::vector<PointPanel>& p
   };
   const double scale = 640.0 / std::max(ex, ey);
   const int pw = int(ex * scale), ph = int(ey * scale), margin = 20, title_h = 34, legend_h = 70;
-  cv::Mat image(title_h + ph + legend_h + margin, margin + int(panels.size()) * (pw + margin), CV_8UC3, kBackground);
+  cv::Mat image(title_h + ph + legend_h + margin, margin + int(panels.size()) * (pw + margin),
+                CV_8UC3, kBackground);
   for (size_t k = 0; k < panels.size(); ++k) {
     const PointPanel& p = panels[k];
     SATMESH_CHECK(p.xy.size() == p.values.size(), ErrorCode::kInvalidArgument,
-                  "point map '" + p.title + "': " + std::to_string(p.values.size()) + " values for " +
-                      std::to_string(p.xy.size()) + " points");
+                  "point map '" + p.title + "': " + std::to_string(p.values.size()) +
+                      " values for " + std::to_string(p.xy.size()) + " points");
     const int x0 = margin + int(k) * (pw + margin);
     cv::rectangle(image, cv::Rect(x0, title_h, pw, ph), cv::Scalar(235, 235, 235), cv::FILLED);
     // Points falling on the same 3 x 3 px cell (a wall seen from above) show their mean.
@@ -179,7 +192,8 @@ void WritePointMapsPng(const std::string& path, const std::vector<PointPanel>& p
     std::vector<int> count(sum.size(), 0);
     for (size_t i = 0; i < p.xy.size(); ++i) {
       if (!std::isfinite(p.values[i])) continue;
-      const int cx = int((p.xy[i].x() - extent[0]) * scale) / kCell, cy = int((extent[3] - p.xy[i].y()) * scale) / kCell;
+      const int cx = int((p.xy[i].x() - extent[0]) * scale) / kCell,
+                cy = int((extent[3] - p.xy[i].y()) * scale) / kCell;
       if (cx < 0 || cy < 0 || cx >= cw || cy >= ch) continue;
       sum[size_t(cy) * cw + cx] += std::min<double>(p.values[i], max_value);
       ++count[size_t(cy) * cw + cx];
@@ -189,26 +203,30 @@ void WritePointMapsPng(const std::string& path, const std::vector<PointPanel>& p
         const size_t c = size_t(cy) * cw + cx;
         if (count[c] == 0) continue;
         const cv::Rect cell(x0 + cx * kCell, title_h + cy * kCell, kCell, kCell);
-        cv::rectangle(image, cell & cv::Rect(x0, title_h, pw, ph), color(sum[c] / count[c]), cv::FILLED);
+        cv::rectangle(image, cell & cv::Rect(x0, title_h, pw, ph), color(sum[c] / count[c]),
+                      cv::FILLED);
       }
     Text(image, p.title, cv::Point(x0, title_h - 10), 0.55);
   }
   const int bar_w = std::min(image.cols - 2 * margin, 480), bar_x = (image.cols - bar_w) / 2;
   const int bar_y = title_h + ph + 14;
   for (int x = 0; x < bar_w; ++x)
-    cv::line(image, cv::Point(bar_x + x, bar_y), cv::Point(bar_x + x, bar_y + 14), color(max_value * x / (bar_w - 1)), 1);
+    cv::line(image, cv::Point(bar_x + x, bar_y), cv::Point(bar_x + x, bar_y + 14),
+             color(max_value * x / (bar_w - 1)), 1);
   for (int t = 0; t <= 4; ++t) {
     const int x = bar_x + t * (bar_w - 1) / 4;
     const std::string label = Format("%.2g", max_value * t / 4.0) + (t == 4 ? "+" : "");
     cv::line(image, cv::Point(x, bar_y + 14), cv::Point(x, bar_y + 19), kInk, 1);
     Text(image, label, cv::Point(x - TextWidth(label, 0.45) / 2, bar_y + 34), 0.45);
   }
-  Text(image, caption, cv::Point(bar_x + bar_w / 2 - TextWidth(caption, 0.45) / 2, bar_y + 52), 0.45);
+  Text(image, caption, cv::Point(bar_x + bar_w / 2 - TextWidth(caption, 0.45) / 2, bar_y + 52),
+       0.45);
   WritePng(path, image);
 }
 
 void WriteLinePlotPng(const std::string& path, const std::vector<PlotSeries>& series,
-                      const std::string& title, const std::string& x_label, const std::string& y_label) {
+                      const std::string& title, const std::string& x_label,
+                      const std::string& y_label) {
   double y0 = INFINITY, y1 = -INFINITY;
   size_t n = 0;
   for (const auto& s : series) {
@@ -216,7 +234,8 @@ void WriteLinePlotPng(const std::string& path, const std::vector<PlotSeries>& se
     for (double v : s.y)
       if (std::isfinite(v)) y0 = std::min(y0, v), y1 = std::max(y1, v);
   }
-  SATMESH_CHECK(std::isfinite(y0), ErrorCode::kInvalidArgument, "plot '" + title + "': no finite value");
+  SATMESH_CHECK(std::isfinite(y0), ErrorCode::kInvalidArgument,
+                "plot '" + title + "': no finite value");
   if (y1 - y0 < 1e-6) y0 -= 0.01, y1 += 0.01;
   const int w = 900, h = 560, left = 80, right = 30, top = 50, bottom = 60;
   // Room above the data for the legend (top right), and a little below.
@@ -227,11 +246,14 @@ void WriteLinePlotPng(const std::string& path, const std::vector<PlotSeries>& se
   cv::Mat image(h, w, CV_8UC3, kBackground);
   const double x_max = std::max<double>(1, double(n) - 1);
   const auto px = [&](double x) { return left + int(std::lround(x / x_max * (w - left - right))); };
-  const auto py = [&](double y) { return top + int(std::lround((y1 - y) / (y1 - y0) * (h - top - bottom))); };
+  const auto py = [&](double y) {
+    return top + int(std::lround((y1 - y) / (y1 - y0) * (h - top - bottom)));
+  };
   // Grid and ticks.
   const double ystep = TickStep(y1 - y0, 6);
   for (double y = std::ceil(y0 / ystep) * ystep; y <= y1; y += ystep) {
-    cv::line(image, cv::Point(left, py(y)), cv::Point(w - right, py(y)), cv::Scalar(225, 225, 225), 1);
+    cv::line(image, cv::Point(left, py(y)), cv::Point(w - right, py(y)), cv::Scalar(225, 225, 225),
+             1);
     const std::string label = Format(ystep < 0.01 ? "%.3f" : "%.2f", y);
     Text(image, label, cv::Point(left - 8 - TextWidth(label, 0.45), py(y) + 5), 0.45);
   }
@@ -247,10 +269,11 @@ void WriteLinePlotPng(const std::string& path, const std::vector<PlotSeries>& se
   cv::Mat ylab(24, TextWidth(y_label) + 8, CV_8UC3, kBackground);
   Text(ylab, y_label, cv::Point(4, 17));
   cv::rotate(ylab, ylab, cv::ROTATE_90_COUNTERCLOCKWISE);
-  if (ylab.rows <= h) ylab.copyTo(image(cv::Rect(6, top + (h - top - bottom - ylab.rows) / 2, ylab.cols, ylab.rows)));
+  if (ylab.rows <= h)
+    ylab.copyTo(image(cv::Rect(6, top + (h - top - bottom - ylab.rows) / 2, ylab.cols, ylab.rows)));
   // Series, and the legend (top right).
-  const cv::Scalar palette[] = {{180, 119, 31}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214},
-                                {189, 103, 148}, {75, 86, 140}};
+  const cv::Scalar palette[] = {{180, 119, 31}, {14, 127, 255},  {44, 160, 44},
+                                {40, 39, 214},  {189, 103, 148}, {75, 86, 140}};
   int legend_y = top + 22;
   for (size_t k = 0; k < series.size(); ++k) {
     const cv::Scalar color = palette[k % 6];
@@ -260,7 +283,8 @@ void WriteLinePlotPng(const std::string& path, const std::vector<PlotSeries>& se
     if (line.size() > 1) cv::polylines(image, line, /*isClosed=*/false, color, 2, cv::LINE_AA);
     for (const auto& p : line) cv::circle(image, p, 3, color, cv::FILLED, cv::LINE_AA);
     const int lx = w - right - 16 - TextWidth(series[k].name) - 34;
-    cv::line(image, cv::Point(lx, legend_y - 5), cv::Point(lx + 26, legend_y - 5), color, 2, cv::LINE_AA);
+    cv::line(image, cv::Point(lx, legend_y - 5), cv::Point(lx + 26, legend_y - 5), color, 2,
+             cv::LINE_AA);
     Text(image, series[k].name, cv::Point(lx + 32, legend_y));
     legend_y += 22;
   }

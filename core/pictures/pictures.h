@@ -21,7 +21,8 @@ struct HillshadeOptions {
 // Grey hillshade of a DSM (Horn's gradient over 3 x 3 cells, the cells' size from the
 // geotransform); cells without data dark blue. Throws Error{kInvalidArgument} for bad
 // options or an empty DSM, Error{kIo} when the file cannot be written.
-void WriteHillshadePng(const std::string& path, const Dsm& dsm, const HillshadeOptions& options = {});
+void WriteHillshadePng(const std::string& path, const Dsm& dsm,
+                       const HillshadeOptions& options = {});
 
 // A surface on the truth's grid, with the title its panel carries.
 struct TitledDsm {
@@ -49,17 +50,19 @@ struct PointPanel {
 // empty extent, max_value <= 0 or values not matching the points, Error{kIo} when the
 // file cannot be written.
 void WritePointMapsPng(const std::string& path, const std::vector<PointPanel>& panels,
-                       const std::array<double, 4>& extent, double max_value, const std::string& caption);
+                       const std::array<double, 4>& extent, double max_value,
+                       const std::string& caption);
 
 struct PlotSeries {
-  std::string name;        // legend entry
-  std::vector<double> y;   // value at x = 0, 1, ...
+  std::string name;       // legend entry
+  std::vector<double> y;  // value at x = 0, 1, ...
 };
 
 // Line plot of each series against its index, with axes, ticks, labels and a legend.
 // Throws Error{kInvalidArgument} when no series has a finite value, Error{kIo} when the
 // file cannot be written.
 void WriteLinePlotPng(const std::string& path, const std::vector<PlotSeries>& series,
-                      const std::string& title, const std::string& x_label, const std::string& y_label);
+                      const std::string& title, const std::string& x_label,
+                      const std::string& y_label);
 
 }  // namespace satmesh

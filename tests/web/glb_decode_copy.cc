@@ -40,15 +40,18 @@ int main(int argc, char** argv) {
   }
   std::ifstream in(argv[1], std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (bytes.size() < 28 || bytes.compare(0, 4, "glTF") != 0) return Fail(std::string(argv[1]) + ": not a GLB");
+  if (bytes.size() < 28 || bytes.compare(0, 4, "glTF") != 0)
+    return Fail(std::string(argv[1]) + ": not a GLB");
   const uint32_t json_length = U32(bytes, 12);
   const auto gltf = nlohmann::json::parse(bytes.substr(20, json_length));
   const size_t bin_at = 20 + json_length + 8;  // the BIN chunk follows the JSON chunk
   const auto& primitives = gltf.at("meshes").at(0).at("primitives");
-  if (gltf.at("meshes").size() != 1 || primitives.size() != 1) return Fail("expected one mesh, one primitive");
+  if (gltf.at("meshes").size() != 1 || primitives.size() != 1)
+    return Fail("expected one mesh, one primitive");
   const auto& draco_ext = primitives[0].at("extensions").at("KHR_draco_mesh_compression");
   const auto& view = gltf.at("bufferViews").at(draco_ext.at("bufferView").get<size_t>());
-  const size_t offset = view.value("byteOffset", size_t(0)), length = view.at("byteLength").get<size_t>();
+  const size_t offset = view.value("byteOffset", size_t(0)),
+               length = view.at("byteLength").get<size_t>();
   if (bin_at + offset + length > bytes.size()) return Fail("Draco buffer view beyond the file");
 
   draco::DecoderBuffer buffer;
@@ -60,11 +63,13 @@ int main(int argc, char** argv) {
   // KHR_draco_mesh_compression maps glTF attribute names to Draco unique ids.
   for (const auto& [name, id] : draco_ext.at("attributes").items()) {
     const draco::PointAttribute* att = mesh.GetAttributeByUniqueId(id.get<uint32_t>());
-    if (!att) return Fail("no Draco attribute " + std::to_string(id.get<uint32_t>()) + " for " + name);
+    if (!att)
+      return Fail("no Draco attribute " + std::to_string(id.get<uint32_t>()) + " for " + name);
     if (att->attribute_type() != draco::GeometryAttribute::GENERIC) continue;
     auto metadata = std::make_unique<draco::AttributeMetadata>();
     metadata->AddEntryString(draco::GltfEncoder::kDracoMetadataGltfAttributeName, name);
-    mesh.AddAttributeMetadata(mesh.GetAttributeIdByUniqueId(id.get<uint32_t>()), std::move(metadata));
+    mesh.AddAttributeMetadata(mesh.GetAttributeIdByUniqueId(id.get<uint32_t>()),
+                              std::move(metadata));
   }
   mesh.SetCompressionEnabled(false);
   draco::GltfEncoder encoder;
