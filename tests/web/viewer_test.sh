@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The job viewer in Debian's headless Chromium (web/tools/viewer-check.mjs, puppeteer-core):
-#  1. satmesh-server on loopback runs a small synthetic job in 2 x 2 tiles; its
-#     /jobs/{id}/viewer page must load every tile with no console error and no request off
-#     the server, and show shaded relief (luminance spread of the city lit vs unlit);
+#  1. satmesh-server on loopback (with a bearer token) runs a small synthetic job in 2 x 2
+#     tiles; its /jobs/{id}/viewer#token=T page, opened while the job runs, must load every
+#     tile with no console error and no request off the server, and show shaded relief
+#     (luminance spread of the city lit vs unlit);
 #  2. the same page as `satmesh refine` writes it (DIR/viewer.html + DIR/Cesium), served by
 #     a plain static file server (python3 -m http.server).
 # Skipped (exit 77) only where chromium or web/node_modules is absent.
@@ -35,7 +36,8 @@ trap cleanup EXIT
 "$satmesh" synth --preset small --out "$work/scene" >/dev/null
 tiling=(--set tiling.size_m=40 --set tiling.overlap_m=8 --set iterations_per_level=4)
 
-# 1. The server's page.
+# 1. The server's page, on a server with a token (the page sends it: #token=).
+export SATMESH_TOKEN="viewer-test-token"
 "$server" --port 0 --data-dir "$work/data" --data-root "$work/scene" --workers 1 >"$work/server.out" 2>"$work/server.log" &
 server_pid=$!
 for _ in $(seq 100); do grep -q "listening on port" "$work/server.out" 2>/dev/null && break; sleep 0.1; done
@@ -46,7 +48,7 @@ port=$(sed -n 's/^listening on port \([0-9]*\)$/\1/p' "$work/server.out")
 id=$("$satmesh" submit "$work/scene/job.json" --server "http://127.0.0.1:$port" --set tiling.size_m=40 \
      --set tiling.overlap_m=8)
 echo "job $id submitted on port $port"
-node "$web/tools/viewer-check.mjs" "http://127.0.0.1:$port/jobs/$id/viewer" 4 "$shots/server.png" | tee "$work/check.json"
+node "$web/tools/viewer-check.mjs" "http://127.0.0.1:$port/jobs/$id/viewer#token=$SATMESH_TOKEN" 4 "$shots/server.png" | tee "$work/check.json"
 grep -qE '"[0-9.]+s running [123]/4"' "$work/check.json" && echo "tiles appeared while the job ran" \
   || echo "note: the job finished before the page showed a partial state"
 

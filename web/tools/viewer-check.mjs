@@ -49,7 +49,7 @@ try {
     });
   });
   const t0 = Date.now();
-  await page.goto(url + '#color=shaded', { waitUntil: 'load' });
+  await page.goto(url + (url.includes('#') ? '&' : '#') + 'color=shaded', { waitUntil: 'load' });
   await page.waitForFunction(() => ['ready', 'error'].includes(document.getElementById('status').dataset.state),
                              { timeout: 240000, polling: 250 });
   result.load_s = (Date.now() - t0) / 1000;
