@@ -29,7 +29,7 @@ std::string ServerUsage() {
          "         [--data-root DIR ...] [--allow-vsi /vsicurl/ ...] [--workers 2]\n"
          "         [--token T | env SATMESH_TOKEN] [--max-body-bytes 1048576]\n"
          "         [--max-images 64] [--max-tiles 1024] [--max-pixels 4000000000]\n"
-         "         [--http-threads 32] [--proto-dir DIR] [--viewer-dir DIR]\n"
+         "         [--http-threads 32] [--proto-dir DIR] [--viewer-dir DIR | env SATMESH_VIEWER_DIR]\n"
          "         [--cors-origin https://example.org ... | --cors-origin '*']\n";
 }
 
@@ -38,6 +38,7 @@ ServerOptions ParseServerArgs(const std::vector<std::string>& args,
                               std::map<std::string, std::string>* extra) {
   ServerOptions o;
   if (const char* token = std::getenv("SATMESH_TOKEN")) o.token = token;
+  if (const char* viewer = std::getenv("SATMESH_VIEWER_DIR")) o.viewer_dir = viewer;  // the image sets it
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& arg = args[i];
     SATMESH_CHECK(arg.rfind("--", 0) == 0 && arg.size() > 2, ErrorCode::kInvalidArgument,
