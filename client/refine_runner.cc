@@ -28,8 +28,6 @@ JobSpec ReadJobWithOverrides(const std::string& job_path, const std::vector<std:
   return proto::JobSpecFromJson(job, std::filesystem::path(job_path).parent_path().string());
 }
 
-namespace {
-
 // DIR/viewer.html (the page satmesh-server serves at /jobs/{id}/viewer) and DIR/Cesium, a
 // link to the CesiumJS the build (or the image) carries: any static file server started
 // in DIR shows the result. SATMESH_VIEWER_DIR overrides where they are taken from.
@@ -50,8 +48,6 @@ void WriteViewer(const std::string& out_dir) {
   }
   spdlog::info("viewer: {}/viewer.html (serve {} over HTTP, e.g. python3 -m http.server -d {})", out_dir, out_dir, out_dir);
 }
-
-}  // namespace
 
 JobOutputs RunJobFile(const std::string& job_path, const std::string& out_dir,
                       const std::vector<std::string>& overrides) {

@@ -126,7 +126,7 @@ if [ "$job" -eq 1 ]; then
   echo "smoke-image: job $id: $(tail -1 "$work/submit.log")"
   in_client satmesh results "$id" --server "$url" --out /inputs/result >"$work/results.log" 2>&1 \
     || { cat "$work/results.log" >&2; fail "satmesh results"; }
-  for f in tileset.json metrics.json; do
+  for f in tileset.json metrics.json preview.png convergence.png viewer.html; do
     [ -s "$work/inputs/result/$f" ] || fail "results: no $f"
   done
   ls "$work/inputs/result/tiles/"*.glb >/dev/null 2>&1 || fail "results: no tiles/*.glb"
