@@ -110,6 +110,16 @@ json SceneEvaluationToJson(const SceneEvaluation& e) {
   j["initial"] = SurfaceEvaluationToJson(e.initial);
   j["result"] = SurfaceEvaluationToJson(e.result);
   j["ratio_result_over_initial"] = Ratios(j["initial"], j["result"]);
+  if (!e.error_by_sigma.empty()) {
+    json bins = json::array();
+    for (const SigmaBin& b : e.error_by_sigma)
+      bins.push_back({{"sigma_min_m", std::isfinite(b.sigma_min_m) ? json(b.sigma_min_m) : json("inf")},
+                      {"sigma_max_m", std::isfinite(b.sigma_max_m) ? json(b.sigma_max_m) : json("inf")},
+                      {"vertices", b.vertices},
+                      {"median_error_m", b.median_error_m},
+                      {"p90_error_m", b.p90_error_m}});
+    j["result_error_by_height_sigma"] = bins;
+  }
   return j;
 }
 
@@ -144,6 +154,13 @@ std::string FormatSceneEvaluation(const SceneEvaluation& e) {
                      e.result.mesh3d.all.num_result_samples, e.result.mesh3d.all.num_truth_samples,
                      e.initial.mesh3d.facade.num_result_samples, e.initial.mesh3d.facade.num_truth_samples,
                      e.result.mesh3d.facade.num_result_samples, e.result.mesh3d.facade.num_truth_samples);
+  if (!e.error_by_sigma.empty()) {
+    out += "result vertices by their height sigma from the images (deciles, then unseen):\n";
+    out += fmt::format("  {:>19} {:>9} {:>14} {:>11}\n", "sigma [m]", "vertices", "median error", "p90 error");
+    for (const SigmaBin& b : e.error_by_sigma)
+      out += fmt::format("  {:>8.3f} - {:>8.3f} {:>9} {:>12.3f} m {:>9.3f} m\n", b.sigma_min_m,
+                         b.sigma_max_m, b.vertices, b.median_error_m, b.p90_error_m);
+  }
   return out;
 }
 

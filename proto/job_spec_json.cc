@@ -81,6 +81,7 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "restart_from_initial") r->restart_from_initial = Boolean(v, path);
     else if (key == "normalize_by_pair_count") r->normalize_by_pair_count = Boolean(v, path);
     else if (key == "min_height_confidence") r->min_height_confidence = Number(v, path);
+    else if (key == "height_sigma_gsd") r->height_sigma_gsd = Number(v, path);
     else if (key == "hold_unseen") r->hold_unseen = Boolean(v, path);
     else if (key == "hold_boundary_xy") r->hold_boundary_xy = Boolean(v, path);
     else if (key == "estimate_bias") r->estimate_bias = Boolean(v, path);

@@ -249,7 +249,14 @@ TriangleMesh MeshFromDsm(const Dsm& dsm) {
   return mesh;
 }
 
-Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid) {
+namespace {
+
+// The grid's cells seen from above: `value(hit)` of the topmost face under each cell
+// centre (NaN where none). retry_boundary: rays that miss are retried off the boundary
+// (RetryOnBoundary, heights only).
+template <typename ValueFn>
+Dsm RasterizeFromAbove(const TriangleMesh& mesh, const Dsm& grid, ValueFn value,
+                       bool retry_boundary) {
   CheckNorthUp(grid.geo_transform, "DsmFromMesh grid");
   SATMESH_CHECK(grid.width >= 0 && grid.height >= 0, ErrorCode::kInvalidArgument,
                 "DsmFromMesh: negative grid size");
@@ -294,15 +301,39 @@ Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid) {
     std::vector<size_t> missed;
     for (size_t k = 0; k < hits.size(); ++k) {
       if (hits[k].hit()) {
-        out.z[size_t(j0) * out.width + k] = float(mesh.origin.z() + HitZ(mesh, hits[k]));
+        out.z[size_t(j0) * out.width + k] = value(hits[k]);
       } else {
         missed.push_back(k);
       }
     }
-    RetryOnBoundary(mesh, scene, rays, missed, delta,
-                    out.z.data() + size_t(j0) * out.width);
+    if (retry_boundary)
+      RetryOnBoundary(mesh, scene, rays, missed, delta, out.z.data() + size_t(j0) * out.width);
   }
   return out;
+}
+
+}  // namespace
+
+Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid) {
+  return RasterizeFromAbove(
+      mesh, grid, [&](const RayHit& hit) { return float(mesh.origin.z() + HitZ(mesh, hit)); },
+      /*retry_boundary=*/true);
+}
+
+Dsm HeightSigmaFromMesh(const TriangleMesh& mesh, const Dsm& grid) {
+  SATMESH_CHECK(mesh.height_sigma.size() == mesh.vertices.size(), ErrorCode::kInvalidArgument,
+                "HeightSigmaFromMesh: the mesh has no height_sigma per vertex");
+  return RasterizeFromAbove(
+      mesh, grid,
+      [&](const RayHit& hit) {
+        const Eigen::Vector3i& f = mesh.faces[hit.face];
+        const float a = mesh.height_sigma[f[0]], b = mesh.height_sigma[f[1]],
+                    c = mesh.height_sigma[f[2]];
+        if (!std::isfinite(a) || !std::isfinite(b) || !std::isfinite(c))
+          return std::numeric_limits<float>::infinity();  // a corner no image sees
+        return (1.f - hit.u - hit.v) * a + hit.u * b + hit.v * c;
+      },
+      /*retry_boundary=*/false);
 }
 
 }  // namespace satmesh

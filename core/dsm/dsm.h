@@ -44,5 +44,9 @@ TriangleMesh MeshFromDsm(const Dsm& dsm);
 // retried 1e-3 cell away and evaluated on the hit face's plane at the exact centre, so
 // DsmFromMesh(MeshFromDsm(d), d) returns every triangulated cell of d unchanged.
 Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid);
+// The same grid holding the topmost surface's height_sigma (barycentric between its
+// vertices; +inf where a corner is seen by no image; NaN where no surface). The mesh must
+// carry height_sigma.
+Dsm HeightSigmaFromMesh(const TriangleMesh& mesh, const Dsm& grid);
 
 }  // namespace satmesh

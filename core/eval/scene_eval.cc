@@ -2,10 +2,14 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <numeric>
 
 #include "core/common/error.h"
 #include "core/dsm/dsm.h"
+#include "core/eval/surface_distance.h"
 #include "core/mesh/mesh_io.h"
 
 namespace satmesh {
@@ -23,7 +27,50 @@ std::string ResultMeshPath(const std::string& result_path) {
   return result_path;
 }
 
+double Quantile(std::vector<float> v, double q) {
+  if (v.empty()) return 0;
+  auto it = v.begin() + long(q * double(v.size() - 1));
+  std::nth_element(v.begin(), it, v.end());
+  return *it;
+}
+
 }  // namespace
+
+std::vector<SigmaBin> ErrorBySigma(const TriangleMesh& result, const TriangleMesh& truth,
+                                   double xmin, double xmax, double ymin, double ymax) {
+  std::vector<SigmaBin> bins;
+  if (result.height_sigma.size() != result.vertices.size() || truth.faces.empty()) return bins;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<float> sigma;
+  for (size_t i = 0; i < result.vertices.size(); ++i) {
+    const Eigen::Vector3d p = result.AbsoluteVertex(i);
+    if (p.x() < xmin || p.x() > xmax || p.y() < ymin || p.y() > ymax) continue;
+    if (std::isnan(result.height_sigma[i])) continue;
+    points.push_back(p);
+    sigma.push_back(result.height_sigma[i]);
+  }
+  const std::vector<float> error = SurfaceDistance(truth).Distances(points, 10.0);
+  std::vector<size_t> order(points.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return sigma[a] < sigma[b]; });
+  size_t finite = 0;
+  while (finite < order.size() && std::isfinite(sigma[order[finite]])) ++finite;
+  auto add = [&](size_t begin, size_t end) {
+    if (end <= begin) return;
+    SigmaBin bin;
+    bin.sigma_min_m = sigma[order[begin]];
+    bin.sigma_max_m = sigma[order[end - 1]];
+    bin.vertices = end - begin;
+    std::vector<float> e;
+    for (size_t k = begin; k < end; ++k) e.push_back(error[order[k]]);
+    bin.median_error_m = Quantile(e, 0.5);
+    bin.p90_error_m = Quantile(e, 0.9);
+    bins.push_back(bin);
+  };
+  for (int d = 0; d < 10; ++d) add(finite * d / 10, finite * (d + 1) / 10);
+  add(finite, order.size());  // no image saw them
+  return bins;
+}
 
 std::string SceneEvalOptions::Check() const {
   if (auto m = dsm.Check(); !m.empty()) return "dsm: " + m;
@@ -90,6 +137,10 @@ SceneEvaluation EvaluateScene(const std::string& scene_dir, const TriangleMesh& 
   spdlog::info("eval: result surface ({} faces)", result.num_faces());
   const Dsm result_dsm = DsmFromMesh(result, truth_dsm);
   s.result = EvaluateSurface(result_dsm, result, truth_dsm, mask, &truth_mesh, options);
+  if (options.evaluate_3d)
+    s.error_by_sigma = ErrorBySigma(result, truth_mesh, options.mesh3d.crop_xmin,
+                                    options.mesh3d.crop_xmax, options.mesh3d.crop_ymin,
+                                    options.mesh3d.crop_ymax);
   return s;
 }
 

@@ -22,13 +22,29 @@ struct SurfaceEvaluation {
   Mesh3dMetrics mesh3d;  // zeros if !SceneEvalOptions::evaluate_3d
 };
 
+// Result vertices grouped by their height sigma from the images (TriangleMesh::height_sigma):
+// does the refinement's confidence mean something? One bin per decile of the finite
+// sigmas, then one for the vertices no image saw (sigma +inf).
+struct SigmaBin {
+  double sigma_min_m = 0, sigma_max_m = 0;  // the bin's range
+  size_t vertices = 0;
+  double median_error_m = 0;  // distance of the bin's vertices to the truth mesh
+  double p90_error_m = 0;
+};
+
 struct SceneEvaluation {
   SurfaceEvaluation initial;  // initial/dsm.tif; 3D: MeshFromDsm(initial)
   SurfaceEvaluation result;   // DSM: DsmFromMesh(result) on the truth grid
   int grid_width = 0, grid_height = 0;
   double gsd_m = 0;
   size_t num_mask_cells = 0;
+  std::vector<SigmaBin> error_by_sigma;  // empty: the result has no height_sigma (or no 3D)
 };
+
+// ErrorBySigma's bins for `result` (with height_sigma) against `truth`, over the vertices
+// inside the crop box (x/y).
+std::vector<SigmaBin> ErrorBySigma(const TriangleMesh& result, const TriangleMesh& truth,
+                                   double xmin, double xmax, double ymin, double ymax);
 
 // The files of a scene directory, by the layout contract.
 struct ScenePaths {

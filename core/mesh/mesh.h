@@ -12,6 +12,10 @@ struct TriangleMesh {
   std::vector<Eigen::Vector3f> vertices;  // tile-local positions
   std::vector<Eigen::Vector3i> faces;     // counter-clockwise seen from outside
   std::string crs;                        // CRS of origin+vertices ("" = unknown/local)
+  // Optional, per vertex (empty: unknown): metres to which the images determine the
+  // vertex along the surface normal (1 sigma under their noise; +inf: no image sees it).
+  // Written by the refinement (RefineResult::mesh), kept by PLY and the tile pipeline.
+  std::vector<float> height_sigma;
 
   size_t num_vertices() const { return vertices.size(); }
   size_t num_faces() const { return faces.size(); }

@@ -215,13 +215,15 @@ TriangleMesh ReadPly(const std::string& path) {
   long long num_vertices = -1;
   for (const PlyElement& element : header.elements) {
     const bool is_vertex = element.name == "vertex";
-    std::vector<int> axis(element.properties.size());  // 0/1/2 for x/y/z, else -1
+    // 0/1/2 for x/y/z, 3 for height_sigma, else -1
+    std::vector<int> axis(element.properties.size());
     int found = 0;
     for (size_t p = 0; p < element.properties.size(); ++p) {
       const std::string& n = element.properties[p].name;
       axis[p] = !is_vertex || element.properties[p].is_list ? -1
-                : n == "x" ? 0 : n == "y" ? 1 : n == "z" ? 2 : -1;
-      if (axis[p] >= 0) ++found;
+                : n == "x" ? 0 : n == "y" ? 1 : n == "z" ? 2 : n == "height_sigma" ? 3 : -1;
+      if (axis[p] >= 0 && axis[p] < 3) ++found;
+      if (axis[p] == 3) mesh.height_sigma.assign(element.count, NAN);
     }
     if (is_vertex) {
       if (found != 3) Fail(path, "PLY vertex element lacks scalar x, y, z properties");
@@ -249,7 +251,8 @@ TriangleMesh ReadPly(const std::string& path) {
         if (!body.Read(property.is_list ? property.count_type : property.type, &value))
           Fail(path, "PLY file is truncated: data ends in " + where());
         if (!property.is_list) {
-          if (axis[p] >= 0) xyz[3 * row + axis[p]] = value;
+          if (axis[p] == 3) mesh.height_sigma[row] = float(value);
+          else if (axis[p] >= 0) xyz[3 * row + axis[p]] = value;
           continue;
         }
         if (!(value >= 0 && value <= 1e6) || value != std::floor(value))
@@ -286,6 +289,8 @@ void WritePly(const std::string& path, const TriangleMesh& mesh, const MeshWrite
     header += "comment crs " + mesh.crs + "\n";
   header += "element vertex " + std::to_string(mesh.vertices.size()) + "\n";
   for (const char* axis : {"x", "y", "z"}) header += std::string("property ") + type + " " + axis + "\n";
+  const bool with_sigma = mesh.height_sigma.size() == mesh.vertices.size() && !mesh.vertices.empty();
+  if (with_sigma) header += "property float height_sigma\n";
   header += "element face " + std::to_string(mesh.faces.size()) + "\n";
   header += "property list uchar int vertex_indices\nend_header\n";
 
@@ -306,8 +311,14 @@ void WritePly(const std::string& path, const TriangleMesh& mesh, const MeshWrite
         options.ply_double ? AppendBinary(&buffer, p[k]) : AppendBinary(&buffer, float(p[k]));
       } else {
         options.ply_double ? AppendNumber(&buffer, p[k]) : AppendNumber(&buffer, float(p[k]));
-        buffer += k < 2 ? ' ' : '\n';
+        buffer += k < 2 || with_sigma ? ' ' : '\n';
       }
+    }
+    if (with_sigma) {
+      const float sigma = mesh.height_sigma[i];
+      if (options.ply_binary) AppendBinary(&buffer, sigma);
+      else if (std::isfinite(sigma)) AppendNumber(&buffer, sigma), buffer += '\n';
+      else buffer += std::isnan(sigma) ? "nan\n" : "inf\n";
     }
     flush(false);
   }

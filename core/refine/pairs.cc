@@ -1,6 +1,7 @@
 #include "core/refine/pairs.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -73,7 +74,44 @@ std::string Refusal(const std::vector<PairCandidateView>& views, const std::vect
   return why.str();
 }
 
+// Facade directions whose coverage the selection tracks: outward normals every 45 degrees.
+constexpr int kFacadeDirections = 8;
+
+// A pair covers a facade direction when both of its views see such facades: the lesser of
+// the two views' FacadeVisibility.
+std::array<double, kFacadeDirections> PairFacadeCoverage(const PairCandidateView& a,
+                                                         const PairCandidateView& b) {
+  std::array<double, kFacadeDirections> c{};
+  for (int d = 0; d < kFacadeDirections; ++d) {
+    const double azimuth = d * 360.0 / kFacadeDirections;
+    c[d] = std::min(FacadeVisibility(a, azimuth), FacadeVisibility(b, azimuth));
+  }
+  return c;
+}
+
+// Coverage per facade direction at which a direction counts as covered: about one pair
+// of views 25 degrees off nadir facing it (sin 25° = 0.42).
+constexpr double kFacadeCoverageTarget = 0.4;
+
+// Facade directions a pair adds to the selection's coverage, in [0, kFacadeDirections]:
+// how much of each direction's shortfall to kFacadeCoverageTarget it fills.
+double FacadeGain(const std::array<double, kFacadeDirections>& pair,
+                  const std::array<double, kFacadeDirections>& covered) {
+  double gain = 0;
+  for (int d = 0; d < kFacadeDirections; ++d)
+    gain += (std::min(kFacadeCoverageTarget, covered[d] + pair[d]) -
+             std::min(kFacadeCoverageTarget, covered[d])) /
+            kFacadeCoverageTarget;
+  return gain;
+}
+
 }  // namespace
+
+double FacadeVisibility(const PairCandidateView& view, double facade_azimuth_deg) {
+  const Eigen::Vector3d outward(std::sin(facade_azimuth_deg * kDeg),
+                                std::cos(facade_azimuth_deg * kDeg), 0);
+  return std::max(0.0, -view.direction.normalized().dot(outward));
+}
 
 std::vector<std::pair<int, int>> PairSelection::IndexPairs() const {
   std::vector<std::pair<int, int>> out;
@@ -157,35 +195,46 @@ PairSelection SelectPairs(const std::vector<PairCandidateView>& views,
 
   std::vector<bool> taken(candidates.size(), false);
   std::vector<int> count(n, 0);
+  std::vector<std::array<double, kFacadeDirections>> facades;
+  for (const StereoPair& p : candidates) facades.push_back(PairFacadeCoverage(views[p.i], views[p.j]));
+  std::array<double, kFacadeDirections> covered{};
   auto take = [&](size_t k) {
     taken[k] = true;
     ++count[candidates[k].i], ++count[candidates[k].j];
+    for (int d = 0; d < kFacadeDirections; ++d) covered[d] += facades[k][d];
     out.pairs.push_back(candidates[k]);
   };
+  // What a free candidate adds now: its score, raised by the facade directions it covers
+  // that the selection does not yet (walls are seen only by views on their side).
+  auto value = [&](size_t k) { return candidates[k].score * (1.0 + FacadeGain(facades[k], covered)); };
   // 1. Maximum spanning forest: every view with a candidate gets a partner, and the
   //    views that can be linked are linked (one bias reference reaches them all).
   Components components(n);
   for (size_t k = 0; k < candidates.size(); ++k)
     if (components.Join(candidates[k].i, candidates[k].j)) take(k);
+  // The free candidate of highest value within the cap per image (of view v if v >= 0).
+  auto best_free = [&](int v) {
+    long best = -1;
+    for (size_t c = 0; c < candidates.size(); ++c) {
+      const StereoPair& p = candidates[c];
+      if (taken[c] || (v >= 0 && p.i != v && p.j != v)) continue;
+      if (count[p.i] >= o.max_pairs_per_image || count[p.j] >= o.max_pairs_per_image) continue;
+      if (best < 0 || value(c) > value(size_t(best))) best = long(c);
+    }
+    return best;
+  };
   // 2. Partners: rounds in which each view short of k partners takes its best free pair.
   const int budget = std::max(PairBudget(int(usable.size()), o), int(out.pairs.size()));
   for (int k = 2; k <= o.partners_per_view; ++k)
     for (int v : usable) {
       if (count[v] >= k || int(out.pairs.size()) >= budget) continue;
-      for (size_t c = 0; c < candidates.size(); ++c) {
-        const StereoPair& p = candidates[c];
-        if (taken[c] || (p.i != v && p.j != v)) continue;
-        if (count[p.i] >= o.max_pairs_per_image || count[p.j] >= o.max_pairs_per_image) continue;
-        take(c);
-        break;
-      }
+      if (const long c = best_free(v); c >= 0) take(size_t(c));
     }
-  // 3. The budget: the best remaining pairs within the cap per image.
-  for (size_t c = 0; c < candidates.size() && int(out.pairs.size()) < budget; ++c) {
-    const StereoPair& p = candidates[c];
-    if (taken[c] || count[p.i] >= o.max_pairs_per_image || count[p.j] >= o.max_pairs_per_image)
-      continue;
-    take(c);
+  // 3. The budget: the most valuable remaining pairs within the cap per image.
+  while (int(out.pairs.size()) < budget) {
+    const long c = best_free(-1);
+    if (c < 0) break;
+    take(size_t(c));
   }
   for (int v : usable)
     if (count[v] == 0) out.unpaired_views.push_back(v);

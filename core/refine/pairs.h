@@ -5,7 +5,8 @@
 // contribute (PairScore: height precision, occlusion, overlap, similarity of the two
 // acquisitions); the selection first connects every usable view (a maximum spanning
 // forest, so that the per-view bias estimation reaches every refined view), then gives
-// each view partners, then fills a budget of pairs that keeps the speed.
+// each view partners, then fills a budget of pairs that keeps the speed; partners and
+// budget favour pairs that cover facade directions no selected pair covers yet.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <limits>
@@ -62,6 +63,13 @@ double PairScore(const PairCandidateView& a, const PairCandidateView& b, double 
 // Fraction of `surface` (frame x/y) covered by both footprints (empty footprint: all).
 double FootprintOverlap(const Eigen::AlignedBox2d& a, const Eigen::AlignedBox2d& b,
                         const Eigen::AlignedBox2d& surface);
+
+// How well a view sees facades whose outward normal points to `facade_azimuth_deg`
+// (degrees clockwise from north): the horizontal component of its direction towards the
+// satellite along that normal, sin(off-nadir) cos(azimuth difference), 0 where it sees
+// their back. Steps 2 and 3 of the selection raise a pair's score by the facade
+// directions it covers (both views see them) that the selected pairs do not yet.
+double FacadeVisibility(const PairCandidateView& view, double facade_azimuth_deg);
 
 // The selection described above; never throws. An empty result carries the reason.
 PairSelection SelectPairs(const std::vector<PairCandidateView>& views,

@@ -32,9 +32,11 @@ void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
 
 }  // namespace
 
-void GradientAccumulator::Reset(const TriangleMesh& mesh) {
+void GradientAccumulator::Reset(const TriangleMesh& mesh, bool with_information) {
   mesh_ = &mesh;
   faces_.assign(mesh.faces.size(), FaceSlot());
+  if (with_information) information_.assign(mesh.faces.size(), Eigen::Vector3f::Zero());
+  else information_.clear();
   vertex_directions_.assign(mesh.vertices.size(), 0);
   seen_.assign(mesh.vertices.size(), 0);
   direction_ = -1;
@@ -62,8 +64,14 @@ void GradientAccumulator::CountDirections() {
 
 void GradientAccumulator::AddTo(const std::vector<Eigen::Vector3f>& face_normals,
                                 std::vector<Eigen::Vector3d>* vertex_gradient,
-                                std::vector<int>* seen) {
+                                std::vector<int>* seen, std::vector<double>* information) {
   if (!mesh_) return;
+  if (information && !information_.empty()) {
+    for (size_t f = 0; f < information_.size(); ++f) {
+      const Eigen::Vector3i& face = mesh_->faces[f];
+      for (int k = 0; k < 3; ++k) (*information)[face[k]] += double(information_[f][k]);
+    }
+  }
   if (vertex_gradient) {
     for (size_t f = 0; f < faces_.size(); ++f) {
       const Eigen::Vector3f& w = faces_[f].weights;
@@ -93,6 +101,7 @@ PairEnergy AccumulatePairGradient(const ViewLevel& view_i, const ViewLevel& view
   energy.sum_zncc = field.sum_zncc;
   energy.num_windows = field.num_windows;
   if (accumulator) accumulator->BeginDirection();
+  const bool with_information = accumulator && accumulator->with_information();
   const RayHit* hits = view_i.hit_map.hits.data();
   const size_t n = warp.valid.size();
   constexpr size_t kAhead = 16;  // pixels: the face slots are random reads of a large array
@@ -105,6 +114,7 @@ PairEnergy AccumulatePairGradient(const ViewLevel& view_i, const ViewLevel& view
     // ∂b/∂V_k = db_dn · w_k · n^T (ray-triangle intersection moved by vertex k).
     const RayHit& hit = hits[p];
     accumulator->AddPixel(hit.face, hit.u, hit.v, field.dM_db[p] * warp.db_dn[p]);
+    if (with_information) accumulator->AddInformation(hit.face, hit.u, hit.v, warp.db_dn[p]);
   }
   return energy;
 }

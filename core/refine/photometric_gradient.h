@@ -47,8 +47,10 @@ struct PairWorkspace {
 // direction bits, 32 directions at a time.
 class GradientAccumulator {
  public:
-  // Zeroes everything for `mesh` (kept by reference until AddTo).
-  void Reset(const TriangleMesh& mesh);
+  // Zeroes everything for `mesh` (kept by reference until AddTo). with_information: also
+  // gather each vertex's height information (AddInformation).
+  void Reset(const TriangleMesh& mesh, bool with_information = false);
+  bool with_information() const { return !information_.empty(); }
   // Starts a new pair-direction (for counting the directions that see each vertex).
   void BeginDirection();
   // Starts loading a face's slot into cache (a pixel some columns ahead).
@@ -58,9 +60,17 @@ class GradientAccumulator {
     slot.weights += Eigen::Vector3f(g * (1.f - u - v), g * u, g * v);
     slot.directions |= direction_bit_;
   }
-  // vertex_gradient[v] += Σ_faces weight · normal; seen[v] += directions that saw v.
+  // The pixel's contribution to the Fisher information of its face's vertices' positions
+  // along the normal: w_k² (∂b/∂n)², ∂b/∂n the warped intensity's derivative (per metre).
+  void AddInformation(int face, float u, float v, float db_dn) {
+    const float w0 = 1.f - u - v, g2 = db_dn * db_dn;
+    information_[face] += Eigen::Vector3f(g2 * w0 * w0, g2 * u * u, g2 * v * v);
+  }
+  // vertex_gradient[v] += Σ_faces weight · normal; seen[v] += directions that saw v;
+  // information[v] += Σ_faces information (if gathered and not null).
   void AddTo(const std::vector<Eigen::Vector3f>& face_normals,
-             std::vector<Eigen::Vector3d>* vertex_gradient, std::vector<int>* seen);
+             std::vector<Eigen::Vector3d>* vertex_gradient, std::vector<int>* seen,
+             std::vector<double>* information = nullptr);
 
  private:
   // Adds the directions marked on the faces to their vertices' counts; clears the marks.
@@ -72,6 +82,7 @@ class GradientAccumulator {
   };
   const TriangleMesh* mesh_ = nullptr;
   std::vector<FaceSlot> faces_;
+  std::vector<Eigen::Vector3f> information_;  // per face, if gathered
   std::vector<uint32_t> vertex_directions_;
   std::vector<int> seen_;
   int direction_ = -1;

@@ -65,6 +65,44 @@ double HeightConfidence(double relative_information, const RefineOptions& option
   return std::clamp(relative_information, options.min_height_confidence, 1.0);
 }
 
+// How well the images determine each vertex's position along the surface normal, in
+// [min_height_confidence, 1]: `information` is the Fisher information Σ w_k² (∂b/∂n)² of
+// the pixels that see the vertex (all pair-directions of an iteration; ∂b/∂n the warped
+// intensity's change per metre along the normal, which holds both the texture and the
+// pair's height sensitivity), so the vertex's height is known to σ = noise / sqrt(I).
+// Confidence 1 where σ is at most height_sigma_gsd level GSDs, else (σ_target / σ)²: the
+// thin-plate weight is divided by it, so where the images constrain a vertex weakly (no
+// texture, shadow, one narrow pair, occlusion) the surface stays smooth and near where it
+// started instead of following matching noise. Also fills the level's quantiles of σ.
+std::vector<float> HeightConfidenceFromInformation(const std::vector<double>& information,
+                                                   double noise_variance, double gsd_m,
+                                                   const RefineOptions& options,
+                                                   LevelStats* stats) {
+  const double target = options.height_sigma_gsd * gsd_m;
+  const double scale = target * target / std::max(noise_variance, 1e-12);
+  std::vector<float> confidence(information.size());
+  std::vector<float> sigma_gsd;
+  sigma_gsd.reserve(information.size());
+  for (size_t v = 0; v < information.size(); ++v) {
+    confidence[v] = float(std::clamp(information[v] * scale, options.min_height_confidence, 1.0));
+    if (information[v] > 0)
+      sigma_gsd.push_back(float(std::sqrt(noise_variance / information[v]) / gsd_m));
+  }
+  if (!sigma_gsd.empty()) {
+    auto quantile = [&](double q) {
+      auto it = sigma_gsd.begin() + long(q * double(sigma_gsd.size() - 1));
+      std::nth_element(sigma_gsd.begin(), it, sigma_gsd.end());
+      return double(*it);
+    };
+    stats->height_sigma_gsd_q = {quantile(0.1), quantile(0.5), quantile(0.9)};
+    spdlog::info("level {}: vertices' height sigma from the images (10/50/90%): {:.3f} / {:.3f} "
+                 "/ {:.3f} GSD (confidence 1 at {:.3f})",
+                 stats->level, stats->height_sigma_gsd_q[0], stats->height_sigma_gsd_q[1],
+                 stats->height_sigma_gsd_q[2], options.height_sigma_gsd);
+  }
+  return confidence;
+}
+
 // Mean over the pairs of PairHeightInformation, relative to one pair at the optimal angle.
 double MeanRelativePairInformation(const std::vector<StereoPair>& pairs,
                                    const RefineOptions& options) {
@@ -93,6 +131,7 @@ struct LevelContext {
   std::vector<std::pair<int, int>>& pairs;
   double mean_pair_information;  // MeanRelativePairInformation of the selected pairs
   double gsd_m;
+  std::vector<double> noise_variance;  // per level: MeanNoiseVariance
 };
 
 // One thread's buffers of the photometric pass, kept across iterations: they are tens
@@ -111,7 +150,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
                        const std::vector<Eigen::Vector3f>& normals,
                        const PhotometricOptions& options, std::vector<PassScratch>* scratch,
                        std::vector<Eigen::Vector3d>* gradient, std::vector<int>* seen,
-                       int one_direction = -1) {
+                       int one_direction = -1, std::vector<double>* information = nullptr) {
   // one_direction >= 0: pair k only as (i, j) if (one_direction + k) is even, else (j, i).
   std::vector<std::pair<int, int>> directions;
   for (size_t k = 0; k < pairs.size(); ++k) {
@@ -120,7 +159,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
     else if ((one_direction + k) % 2 == 0) directions.push_back({i, j});
     else directions.push_back({j, i});
   }
-  const bool accumulate = gradient || seen;
+  const bool accumulate = gradient || seen || information;
   double sum = 0;
   long count = 0;
   if (scratch->size() < size_t(omp_get_max_threads())) scratch->resize(omp_get_max_threads());
@@ -128,7 +167,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
   {
     PassScratch& own = (*scratch)[omp_get_thread_num()];
     GradientAccumulator& accumulator = own.accumulator;
-    if (accumulate) accumulator.Reset(mesh);
+    if (accumulate) accumulator.Reset(mesh, information != nullptr);
     PairWorkspace& workspace = own.workspace;
 #pragma omp for schedule(dynamic, 1) reduction(+ : sum, count)
     for (size_t d = 0; d < directions.size(); ++d) {
@@ -141,7 +180,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
     }
     if (accumulate) {
 #pragma omp critical
-      accumulator.AddTo(normals, gradient, seen);
+      accumulator.AddTo(normals, gradient, seen, information);
     }
   }
   return count > 0 ? sum / count : 0.0;
@@ -218,6 +257,12 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   stats.num_faces = int(mesh->faces.size());
   std::vector<Eigen::Vector3d> gradient(nv);
   std::vector<int> seen(nv);
+  // Per-vertex height confidence (HeightConfidenceFromInformation), from the level's first
+  // iteration (both directions of every pair); empty: from the pairs' geometry.
+  std::vector<double> information;
+  std::vector<float> confidence;
+  const bool data_confidence = opt.height_sigma_gsd > 0 && opt.min_height_confidence < 1;
+  if (data_confidence || level == 0) information.assign(nv, 0.0);
 
   for (int it = 0; it <= opt.iterations_per_level; ++it) {
     ctx.progress.ThrowIfCancelled();
@@ -238,15 +283,33 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     t0 = Clock::now();
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
     std::fill(seen.begin(), seen.end(), 0);
+    if (last) std::fill(information.begin(), information.end(), 0.0);
     // Iterations between the first and the last take one direction per pair, alternating.
     const bool half = opt.alternate_directions && it > 0 && !last;
     const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, normals, photo, &scratch,
                                         last ? nullptr : &gradient, last ? nullptr : &seen,
-                                        half ? it % 2 : -1);
+                                        half ? it % 2 : -1,
+                                        (it == 0 && data_confidence) || (last && level == 0)
+                                            ? &information
+                                            : nullptr);
+    if (it == 0 && data_confidence)
+      confidence = HeightConfidenceFromInformation(information, ctx.noise_variance[level], gsd,
+                                                   opt, &stats);
     stats.mean_zncc.push_back(zncc);
     stats.times.gradient_s += Seconds(t0);
     if (it == 0 && zncc < abandon_below) return false;
-    if (last) break;
+    if (last) {
+      // The finished surface's height sigma from the images (+inf: no image sees it).
+      if (level == 0) {
+        const double noise_variance = std::max(ctx.noise_variance[0], 1e-12);
+        stats_out->vertex_height_sigma_m.resize(nv);
+        for (size_t v = 0; v < nv; ++v)
+          stats_out->vertex_height_sigma_m[v] =
+              information[v] > 0 ? float(std::sqrt(noise_variance / information[v]))
+                                 : std::numeric_limits<float>::infinity();
+      }
+      break;
+    }
 
     t0 = Clock::now();
     const auto u2 = UmbrellaSquared(mesh->vertices, adjacency);
@@ -258,13 +321,16 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const double smooth_scale = opt.step * opt.beta;
     const double max_move = opt.max_step_gsd * gsd;
     const double directions_per_pair = half ? 1.0 : 2.0;
+    const float* confidence_of = confidence.data();
 #pragma omp parallel for schedule(static)
     for (long v = 0; v < long(nv); ++v) {
       if (opt.hold_unseen && seen[v] == 0) continue;  // no image constrains it
       Eigen::Vector3d g = gradient[v];
       if (opt.normalize_by_pair_count && seen[v] > 1) g /= double(seen[v]);
       const double confidence =
-          HeightConfidence(seen[v] / directions_per_pair * ctx.mean_pair_information, opt);
+          data_confidence
+              ? double(confidence_of[v])
+              : HeightConfidence(seen[v] / directions_per_pair * ctx.mean_pair_information, opt);
       Eigen::Vector3d move = -photo_scale * g - smooth_scale / confidence * u2[v].cast<double>();
       if (opt.hold_boundary_xy && adjacency.is_boundary[v]) move.x() = move.y() = 0;
       const double len = move.norm();
@@ -353,13 +419,16 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   RefineResult* result) {
   TriangleMesh mesh =
       RemeshForLevel(input.initial_mesh, options, result->gsd_m, options.levels, progress);
-  const LevelContext ctx{input,
+  LevelContext ctx{input,
                          options,
                          progress,
                          views,
                          result->pairs,
                          MeanRelativePairInformation(result->pair_details, options),
-                         result->gsd_m};
+                         result->gsd_m,
+                         {}};
+  for (int level = 0; level <= options.levels; ++level)
+    ctx.noise_variance.push_back(MeanNoiseVariance(views, level));
   bool check_initial = options.restart_from_initial;
   for (int level = options.levels; level >= 0; --level) {
     const auto level_start = Clock::now();
@@ -397,6 +466,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
     stats.restarted = restarted;
     stats.initial_check_s = check_s;
     stats.level_s = Seconds(level_start);
+    if (level == 0) mesh.height_sigma = std::move(stats.vertex_height_sigma_m);
     result->levels.push_back(std::move(stats));
   }
   result->mesh = std::move(mesh);

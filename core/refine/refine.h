@@ -53,12 +53,18 @@ struct LevelStats {
   double initial_zncc = std::numeric_limits<double>::quiet_NaN();
   bool restarted = false;
   double initial_check_s = 0;          // meshing and measuring the initial surface
+  // 10/50/90% quantiles of the vertices' height sigma from the images, in level GSD
+  // (refine.cc, HeightConfidenceFromInformation); empty: not measured.
+  std::vector<double> height_sigma_gsd_q;
+  std::vector<float> vertex_height_sigma_m;  // level 0 until CoarseToFine moves it to the result
   StageTimes times;
   double level_s = 0;                  // all of the level, initial_check_s included
 };
 
 struct RefineResult {
-  TriangleMesh mesh;                   // in the input frame
+  TriangleMesh mesh;                   // in the input frame; height_sigma from the Fisher
+                                       // information of the full-resolution pixels of all
+                                       // pair-directions that see each vertex
   std::vector<std::pair<int, int>> pairs;  // selected (view indices), sorted
   std::vector<StereoPair> pair_details;    // the same, with angle, overlap and score
   int candidate_pairs = 0;                 // pairs that passed angle, overlap and contrast

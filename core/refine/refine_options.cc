@@ -52,6 +52,8 @@ std::string RefineOptions::Check() const {
     return "virtual_camera_grid_px must be >= 1, got " + Num(virtual_camera_grid_px);
   if (hit_maps_every < 1 || hit_maps_every > 20)
     return "hit_maps_every must be in [1, 20], got " + Num(hit_maps_every);
+  if (!(height_sigma_gsd >= 0))
+    return "height_sigma_gsd must be >= 0, got " + Num(height_sigma_gsd);
   if (!(min_height_confidence > 0 && min_height_confidence <= 1))
     return "min_height_confidence must be in (0, 1], got " + Num(min_height_confidence);
   if (!(coarse_edge_px > 0)) return "coarse_edge_px must be > 0, got " + Num(coarse_edge_px);

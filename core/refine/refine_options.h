@@ -68,6 +68,12 @@ struct RefineOptions {
                                        // that of one pair at pairs.optimal_angle_deg; the
                                        // thin-plate weight is divided by it (refine.cc,
                                        // HeightConfidence). 1: off (uniform beta), (0, 1]
+  double height_sigma_gsd = 0.0;   // > 0: a vertex's height confidence comes from the
+                                   // images (Fisher information of the pixels that see
+                                   // it under the images' noise): 1 where they determine
+                                   // its height to within this, in level GSD (1 sigma),
+                                   // falling as (this / sigma)² below; 0: from the
+                                   // pairs' geometry only, >= 0
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing

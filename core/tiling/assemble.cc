@@ -74,6 +74,13 @@ void AppendPiece(const TriangleMesh& piece, TriangleMesh* mesh) {
   if (mesh->vertices.empty()) mesh->origin = piece.origin, mesh->crs = piece.crs;
   const Eigen::Vector3f shift = (piece.origin - mesh->origin).cast<float>();
   const int base = int(mesh->vertices.size());
+  // height_sigma: kept where every piece has it (NaN-padded while pieces disagree).
+  const bool had_sigma = mesh->height_sigma.size() == size_t(base) && base > 0;
+  const bool has_sigma = piece.height_sigma.size() == piece.vertices.size();
+  if (base == 0 && has_sigma) mesh->height_sigma = piece.height_sigma;
+  else if (had_sigma && has_sigma)
+    mesh->height_sigma.insert(mesh->height_sigma.end(), piece.height_sigma.begin(), piece.height_sigma.end());
+  else mesh->height_sigma.clear();
   for (const auto& v : piece.vertices) mesh->vertices.push_back(v + shift);
   for (const auto& f : piece.faces) mesh->faces.push_back(f + Eigen::Vector3i::Constant(base));
 }
@@ -114,15 +121,24 @@ Assembly AssembleOutputs(const JobPlan& plan, const std::vector<TileResult>& res
   dsm.geo_transform[0] += a.col0 * dsm.geo_transform[1];
   dsm.geo_transform[3] += a.row0 * dsm.geo_transform[5];
   dsm.z.assign(size_t(a.width) * a.height, kNaN);
+  Dsm confidence = dsm;  // written if every successful tile has one
+  bool all_confidence = true;
   for (const auto& r : results) {
     if (!r.ok) continue;
     const PlannedTile& tile = plan.tiles[r.index];
     AppendPiece(ReadMesh((fs::path(out_dir) / TilePiecePath(tile)).string()), &mesh);
     const TileDsm t = LoadTileDsm(out_dir, tile);
+    const fs::path confidence_path = fs::path(out_dir) / TileConfidencePath(tile);
+    std::optional<TileDsm> tc;
+    if (all_confidence && fs::exists(confidence_path))
+      tc = TileDsm{ReadDsm(confidence_path.string()), tile.padded_cells};
+    all_confidence = all_confidence && tc.has_value();
     const PixelWindow& c = tile.core_cells;
     for (int row = c.row0; row < c.row0 + c.height; ++row)
-      for (int col = c.col0; col < c.col0 + c.width; ++col)
+      for (int col = c.col0; col < c.col0 + c.width; ++col) {
         dsm.at(col - a.col0, row - a.row0) = t.At(col, row);
+        if (tc) confidence.at(col - a.col0, row - a.row0) = tc->At(col, row);
+      }
   }
   out.vertices = mesh.num_vertices();
   out.faces = mesh.num_faces();
@@ -131,6 +147,10 @@ Assembly AssembleOutputs(const JobPlan& plan, const std::vector<TileResult>& res
   WriteMesh(out.mesh_path, mesh);
   mesh = TriangleMesh{};
   WriteDsm(out.dsm_path, dsm);
+  if (all_confidence) {
+    out.confidence_path = (fs::path(out_dir) / "confidence.tif").string();
+    WriteDsm(out.confidence_path, confidence);
+  }
 
   // Seams between successful neighbours.
   std::vector<double> all;

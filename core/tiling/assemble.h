@@ -36,6 +36,8 @@ struct Tileset {                         // 3D Tiles 1.1: a root (no content) + 
 
 struct Assembly {
   std::string mesh_path, dsm_path;       // out_dir/mesh.ply, out_dir/dsm.tif
+  std::string confidence_path;           // out_dir/confidence.tif (tile_run.h,
+                                         // ConfidenceFromHeightSigma); empty: not written
   size_t vertices = 0, faces = 0;        // of the assembled mesh
   int tiles_ok = 0, tiles_failed = 0;
   std::vector<SeamStats> seams;          // one per pair of neighbouring successful tiles

@@ -1,5 +1,7 @@
 // ClipToBox: Sutherland-Hodgman against the box's four edges, one cut vertex per edge.
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <utility>
 
@@ -21,7 +23,8 @@ double Inside(const Eigen::Vector3d& p, const Box2d& b, int plane) {
 
 class Clipper {
  public:
-  Clipper(const PointMesh& in, const Box2d& box) : box_(box), points_(in.points) {}
+  Clipper(const PointMesh& in, const Box2d& box)
+      : box_(box), points_(in.points), sigma_(in.height_sigma) {}
 
   // Cuts polygon `poly` (vertex ids) by one half-plane.
   std::vector<int> Cut(const std::vector<int>& poly, int plane) {
@@ -36,6 +39,7 @@ class Clipper {
     return out;
   }
   std::vector<Eigen::Vector3d>& points() { return points_; }
+  const std::vector<float>& sigma() const { return sigma_; }
 
  private:
   static void Push(int v, std::vector<int>* poly) {
@@ -56,12 +60,18 @@ class Clipper {
     if (plane == 2) p.y() = box_.ymin;
     if (plane == 3) p.y() = box_.ymax;
     points_.push_back(p);
+    if (!sigma_.empty()) {  // interpolated along the edge (+inf stays +inf)
+      const float t = float(da / (da - db));
+      sigma_.push_back(sigma_[a] + t * (sigma_[b] - sigma_[a]));
+      if (!std::isfinite(sigma_.back())) sigma_.back() = std::max(sigma_[a], sigma_[b]);
+    }
     cuts_[key] = int(points_.size()) - 1;
     return int(points_.size()) - 1;
   }
 
   Box2d box_;
   std::vector<Eigen::Vector3d> points_;
+  std::vector<float> sigma_;  // per point of points_, or empty
   std::map<std::tuple<int, int, int>, int> cuts_;
 };
 
@@ -94,7 +104,11 @@ PointMesh ClipToBox(const PointMesh& mesh, const Box2d& box) {
   for (auto& f : faces) {
     for (int k = 0; k < 3; ++k) {
       int& m = remap[f[k]];
-      if (m < 0) m = int(out.points.size()), out.points.push_back(clipper.points()[f[k]]);
+      if (m < 0) {
+        m = int(out.points.size());
+        out.points.push_back(clipper.points()[f[k]]);
+        if (!clipper.sigma().empty()) out.height_sigma.push_back(clipper.sigma()[f[k]]);
+      }
       f[k] = m;
     }
   }

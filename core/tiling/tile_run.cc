@@ -33,6 +33,7 @@ TriangleMesh ToTriangleMesh(const PointMesh& m, const std::string& crs) {
   out.origin = centroid.array().round().matrix();
   out.crs = crs;
   out.faces = m.faces;
+  out.height_sigma = m.height_sigma;
   out.vertices.reserve(m.points.size());
   for (const auto& p : m.points) out.vertices.push_back((p - out.origin).cast<float>());
   return out;
@@ -110,7 +111,8 @@ std::vector<VertexScalar> ViewerScalars(const PointMesh& piece_dsm, const std::v
 void WritePiece(const PointMesh& piece_dsm, const PlannedTile& tile, const JobPlan& plan,
                 const Dsm& initial, const fs::path& out_dir, TileResult* r) {
   const std::string& dsm_crs = plan.dsm.crs_wkt;
-  PointMesh piece_out{Transformed(piece_dsm.points, dsm_crs, plan.output_crs), piece_dsm.faces};
+  PointMesh piece_out{Transformed(piece_dsm.points, dsm_crs, plan.output_crs), piece_dsm.faces,
+                      piece_dsm.height_sigma};
   WriteAtomically(out_dir / TilePiecePath(tile), [&](const std::string& p) {
     WriteMesh(p, ToTriangleMesh(piece_out, plan.output_crs));
   });
@@ -155,6 +157,19 @@ void WritePiece(const PointMesh& piece_dsm, const PlannedTile& tile, const JobPl
 std::string TileGlbPath(const PlannedTile& t) { return "tiles/" + t.Name() + ".glb"; }
 std::string TilePiecePath(const PlannedTile& t) { return "tiles/" + t.Name() + ".ply"; }
 std::string TileDsmPath(const PlannedTile& t) { return "tiles/" + t.Name() + ".tif"; }
+std::string TileConfidencePath(const PlannedTile& t) { return "tiles/" + t.Name() + ".confidence.tif"; }
+
+float ConfidenceFromHeightSigma(float sigma_m, double gsd_m) {
+  if (std::isnan(sigma_m)) return sigma_m;
+  if (!std::isfinite(sigma_m)) return 0.f;
+  const double r = sigma_m / gsd_m;
+  return float(1.0 / (1.0 + r * r));
+}
+
+Dsm ConfidenceFromHeightSigma(Dsm sigma, double gsd_m) {
+  for (float& v : sigma.z) v = ConfidenceFromHeightSigma(v, gsd_m);
+  return sigma;
+}
 
 TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
                    const std::string& out_dir, const Progress& progress, bool keep_mesh) {
@@ -182,7 +197,8 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
     const TriangleMesh& local = r.refine.mesh;
     std::vector<Eigen::Vector3d> geo(local.vertices.size());
     for (size_t i = 0; i < geo.size(); ++i) geo[i] = input.refine.frame.GeoFromLocal(local.AbsoluteVertex(i));
-    const PointMesh padded{Transformed(std::move(geo), kWgs84Geographic3D, plan.dsm.crs_wkt), local.faces};
+    const PointMesh padded{Transformed(std::move(geo), kWgs84Geographic3D, plan.dsm.crs_wkt),
+                           local.faces, local.height_sigma};
     fs::create_directories(fs::path(out_dir) / "tiles");
 
     // The whole refined (padded) tile as a DSM: assembly takes its core cells, seams
@@ -197,6 +213,12 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
     grid.z.assign(size_t(grid.width) * grid.height, 0.f);
     const Dsm padded_dsm = DsmFromMesh(ToTriangleMesh(padded, plan.dsm.crs_wkt), grid);
     WriteAtomically(fs::path(out_dir) / TileDsmPath(tile), [&](const std::string& p) { WriteDsm(p, padded_dsm); });
+    if (!local.height_sigma.empty()) {
+      const Dsm confidence = ConfidenceFromHeightSigma(
+          HeightSigmaFromMesh(ToTriangleMesh(padded, plan.dsm.crs_wkt), grid), r.refine.gsd_m);
+      WriteAtomically(fs::path(out_dir) / TileConfidencePath(tile),
+                      [&](const std::string& p) { WriteDsm(p, confidence); });
+    }
 
     const PointMesh piece = ClipToBox(padded, tile.core);
     SATMESH_CHECK(!piece.faces.empty(), ErrorCode::kInvalidInput,

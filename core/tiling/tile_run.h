@@ -55,9 +55,19 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
 // The part of a mesh inside `box` (x, y; any z): faces crossing the box's edges are cut
 // exactly along them (Sutherland-Hodgman; a cut edge shared by two faces gives one
 // vertex), so neighbouring tiles' pieces meet along the edge without gap or overlap.
+// tiles/NAME.confidence.tif: the padded tile's ConfidenceFromHeightSigma on its DSM grid.
+std::string TileConfidencePath(const PlannedTile& t);
+
+// How well the images pin the refined surface, [0, 1]: 1 / (1 + (sigma / GSD)²) for its
+// height sigma from the images (TriangleMesh::height_sigma): 1 far below a pixel, 0.5 at
+// one GSD, 0 where no image sees it (+inf); NaN stays NaN (no surface).
+float ConfidenceFromHeightSigma(float sigma_m, double gsd_m);
+Dsm ConfidenceFromHeightSigma(Dsm sigma, double gsd_m);
+
 struct PointMesh {
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector3i> faces;
+  std::vector<float> height_sigma;  // per point, or empty (TriangleMesh::height_sigma)
 };
 PointMesh ClipToBox(const PointMesh& mesh, const Box2d& box);
 

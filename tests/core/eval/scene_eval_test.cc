@@ -79,5 +79,39 @@ TEST(EvaluateScene, MissingFilesAreNamed) {
 
 TEST(SceneEvalOptions, DefaultsAreValid) { EXPECT_EQ(SceneEvalOptions{}.Check(), ""); }
 
+// Error by height sigma: a flat truth and a result whose vertices sit sigma above it
+// (sigma = 0.01 m x index): the deciles' median errors rise with sigma and equal it; the
+// vertices no image saw (+inf) get their own bin.
+TEST(ErrorBySigma, BinsTheResultsErrorByItsSigma) {
+  TriangleMesh truth, result;
+  const int n = 40;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      truth.vertices.emplace_back(float(i), float(j), 0.f);
+      const float sigma = 0.001f * float(j * (n + 1) + i);
+      result.vertices.emplace_back(float(i), float(j), sigma);
+      result.height_sigma.push_back(i == n ? std::numeric_limits<float>::infinity() : sigma);
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i;
+      truth.faces.emplace_back(a, a + 1, a + n + 2);
+      truth.faces.emplace_back(a, a + n + 2, a + n + 1);
+    }
+  result.faces = truth.faces;
+  const auto bins = ErrorBySigma(result, truth, -1, n + 1, -1, n + 1);
+  ASSERT_EQ(bins.size(), 11u);
+  for (size_t b = 0; b < 10; ++b) {
+    EXPECT_GT(bins[b].vertices, 150u);
+    EXPECT_GE(bins[b].median_error_m, bins[b].sigma_min_m - 1e-4);
+    EXPECT_LE(bins[b].median_error_m, bins[b].sigma_max_m + 1e-4);
+    if (b > 0) {
+      EXPECT_GT(bins[b].median_error_m, bins[b - 1].median_error_m);
+    }
+  }
+  EXPECT_EQ(bins[10].vertices, size_t(n + 1));
+  EXPECT_TRUE(std::isinf(bins[10].sigma_min_m));
+}
+
 }  // namespace
 }  // namespace satmesh

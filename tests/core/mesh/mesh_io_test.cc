@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "core/common/error.h"
@@ -376,6 +377,29 @@ TEST(WriteGlb, BadScalarsRejectedWithTheirName) {
   std::vector<float> nan(mesh.num_vertices(), 0.f);
   nan[2] = NAN;
   EXPECT_TRUE(Contains(error({"_HEIGHT", nan}), "not finite at vertex 2"));
+}
+
+// The refinement's per-vertex height sigma survives PLY in every encoding, +inf (no image
+// saw the vertex) included; a mesh without it is written without the property.
+TEST(ReadMesh, PlyKeepsHeightSigma) {
+  TriangleMesh mesh = UtmMesh();
+  for (size_t i = 0; i < mesh.num_vertices(); ++i) mesh.height_sigma.push_back(0.01f * float(i + 1));
+  mesh.height_sigma.back() = std::numeric_limits<float>::infinity();
+  for (const bool binary : {true, false}) {
+    SCOPED_TRACE(binary ? "binary" : "ascii");
+    MeshWriteOptions options;
+    options.ply_binary = binary;
+    const std::string path = TempPath("sigma.ply");
+    WriteMesh(path, mesh, options);
+    const TriangleMesh back = ReadMesh(path);
+    ASSERT_EQ(back.height_sigma.size(), mesh.num_vertices());
+    EXPECT_EQ(back.height_sigma, mesh.height_sigma);  // shortest round-trip text is exact
+    EXPECT_EQ(back.AbsoluteVertex(1), mesh.AbsoluteVertex(1));
+  }
+  const std::string plain = TempPath("plain.ply");
+  WriteMesh(plain, UtmMesh());
+  EXPECT_EQ(Slurp(plain).find("height_sigma"), std::string::npos);
+  EXPECT_TRUE(ReadMesh(plain).height_sigma.empty());
 }
 
 }  // namespace

@@ -184,5 +184,38 @@ TEST(FootprintOverlap, FractionOfTheSurface) {
   EXPECT_NEAR(FootprintOverlap(Eigen::AlignedBox2d(), b, kSurface), 0.75, 1e-12);
 }
 
+TEST(FacadeVisibility, IsTheHorizontalReachTowardsTheFacadesNormal) {
+  const PairCandidateView east = View(30, 90);  // satellite to the east, 30 deg off nadir
+  EXPECT_NEAR(FacadeVisibility(east, 90), 0.5, 1e-9);                      // sin 30
+  EXPECT_NEAR(FacadeVisibility(east, 45), 0.5 * std::cos(45 * kDeg), 1e-9);
+  EXPECT_EQ(FacadeVisibility(east, 270), 0.0);  // it sees the back of west-facing walls
+  EXPECT_NEAR(FacadeVisibility(View(0, 90), 90), 0.0, 1e-9);  // nadir sees no wall
+}
+
+// Two views east of the scene and two west, and a budget of 5 pairs: the four cross pairs
+// (44-48 degrees) score far higher than the two same-side ones (4 degrees: weak height
+// precision), so by score alone the selection would take the four cross pairs and one
+// same-side pair; but only a same-side pair sees that side's walls, so it takes both.
+TEST(SelectPairs, CoversFacadeDirectionsThatOnlySameSidePairsSee) {
+  const std::vector<PairCandidateView> views = {View(20, 88), View(24, 92), View(20, 268),
+                                                View(24, 272)};
+  PairOptions o;
+  o.max_pairs = 5;
+  const PairSelection s = SelectPairs(views, kSurface, o);
+  ASSERT_EQ(s.pairs.size(), 5u);
+  std::set<std::pair<int, int>> chosen;
+  for (const auto& p : s.pairs) chosen.insert({p.i, p.j});
+  EXPECT_TRUE(chosen.count({0, 1})) << "east walls";
+  EXPECT_TRUE(chosen.count({2, 3})) << "west walls";
+  double best_cross = 0;
+  for (const auto& p : s.pairs)
+    if (p.i / 2 != p.j / 2) best_cross = std::max(best_cross, p.score);
+  for (const auto& p : s.pairs) {
+    if (p.i / 2 != p.j / 2) continue;
+    EXPECT_LT(p.angle_deg, 5) << p.i << "-" << p.j;
+    EXPECT_LT(p.score, 0.5 * best_cross);
+  }
+}
+
 }  // namespace
 }  // namespace satmesh

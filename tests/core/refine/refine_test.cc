@@ -235,5 +235,36 @@ TEST(Refine, TwoViewStereoAtWideConvergenceRefines) {
   }
 }
 
+// The vertices' height sigma from the images' Fisher information (HeightConfidenceFromInformation)
+// follows the pair's base-to-height ratio: on the same textured plane with the same noise,
+// a 35-degree pair determines heights 2 tan(17.5°) / 2 tan(7.5°) = 2.39x better than a
+// 15-degree one.
+TEST(Refine, HeightSigmaFromTheImagesFollowsTheBaseToHeightRatio) {
+  const testing::Plane plane;
+  RefineOptions options = SmallOptions();
+  options.levels = 0;
+  options.iterations_per_level = 1;
+  options.height_sigma_gsd = 0.1;
+  std::vector<double> median_sigma;
+  for (const double gamma : {15.0, 35.0}) {
+    auto input = testing::MakePlaneInput(plane, {{gamma / 2, 10}, {gamma / 2, 190}},
+                                         testing::PlaneMesh(plane, 40, 1.0, 0.0));
+    // The same noise in both views and both pairs (the renders are noise-free).
+    uint32_t state = 12345;
+    for (auto& view : input.views)
+      for (float& px : view.image.pixels) {
+        state = state * 1664525u + 1013904223u;
+        px += 20.f * (float(state >> 8) / float(1 << 24) - 0.5f);
+      }
+    const RefineResult result = Refine(input, options);
+    ASSERT_EQ(result.levels.size(), 1u);
+    ASSERT_EQ(result.levels[0].height_sigma_gsd_q.size(), 3u);
+    median_sigma.push_back(result.levels[0].height_sigma_gsd_q[1]);
+    EXPECT_GT(median_sigma.back(), 0.0);
+  }
+  const double expected = std::tan(17.5 * M_PI / 180) / std::tan(7.5 * M_PI / 180);
+  EXPECT_NEAR(median_sigma[0] / median_sigma[1], expected, 0.15 * expected);
+}
+
 }  // namespace
 }  // namespace satmesh

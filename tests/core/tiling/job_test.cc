@@ -90,6 +90,22 @@ TEST_F(TiledJob, RefinesTilesAndAssemblesOutputs) {
   EXPECT_EQ(o.assembly.seams.size(), 4u);
   EXPECT_GT(o.assembly.seams_total.cells, 4 * 2 * 50);
   EXPECT_LT(o.assembly.seams_total.median_abs_m, 0.15);
+  // The refinement's confidence: per vertex in mesh.ply, per cell in confidence.tif on
+  // the DSM's grid, in [0, 1], high where the images pin the surface and not everywhere.
+  ASSERT_EQ(mesh.height_sigma.size(), mesh.num_vertices());
+  ASSERT_FALSE(o.assembly.confidence_path.empty());
+  const Dsm confidence = ReadDsm(o.assembly.confidence_path);
+  EXPECT_EQ(confidence.geo_transform, dsm.geo_transform);
+  int cells = 0, high = 0, low = 0;
+  for (float c : confidence.z) {
+    if (std::isnan(c)) continue;
+    ASSERT_GE(c, 0.f);
+    ASSERT_LE(c, 1.f);
+    ++cells, high += c > 0.5f, low += c < 0.2f;
+  }
+  EXPECT_GT(cells, dsm.width * dsm.height / 2);
+  EXPECT_GT(high, cells / 10);
+  EXPECT_GT(low, cells / 100);
 }
 
 TEST_F(TiledJob, TilesetBoundingVolumesContainTheirContent) {

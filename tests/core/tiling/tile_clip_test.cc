@@ -63,5 +63,17 @@ TEST(ClipToBox, SharedCutsAreOneVertexAndInsideFacesAreKept) {
   EXPECT_TRUE(ClipToBox(mesh, {10, 10, 12, 12}).faces.empty());
 }
 
+// A per-point height sigma is carried by the kept points and interpolated along the cut
+// edges like the coordinates: sigma = x here, so every point's sigma equals its x.
+TEST(ClipToBox, CarriesHeightSigmaInterpolatedAtTheCuts) {
+  PointMesh m = GridMesh(6);
+  for (const auto& p : m.points) m.height_sigma.push_back(float(p.x()));
+  const PointMesh out = ClipToBox(m, Box2d{1.3, 0.7, 4.6, 5.2});
+  ASSERT_EQ(out.height_sigma.size(), out.points.size());
+  for (size_t i = 0; i < out.points.size(); ++i)
+    EXPECT_NEAR(out.height_sigma[i], out.points[i].x(), 1e-5) << i;
+  EXPECT_TRUE(ClipToBox(GridMesh(6), Box2d{1.3, 0.7, 4.6, 5.2}).height_sigma.empty());
+}
+
 }  // namespace
 }  // namespace satmesh
