@@ -4,6 +4,7 @@
 
 #include "client/args.h"
 #include "client/command.h"
+#include "client/eval_pictures.h"
 #include "client/eval_report_format.h"
 #include "client/refine_runner.h"
 #include "core/eval/scene_eval.h"
@@ -36,6 +37,15 @@ int RunDemo(const std::vector<std::string>& argv) {
   std::printf("== 3/3 evaluation (initial DSM vs refined mesh, against the ground truth)\n");
   const SceneEvaluation evaluation = EvaluateScene(scene_dir, outputs.mesh_path);
   std::printf("%s\n", FormatSceneEvaluation(evaluation).c_str());
+  const std::string pictures = (std::filesystem::path(out) / "pictures").string();
+  std::printf("== pictures\n");
+  for (const auto& path : WriteEvalPictures(scene_dir, result_dir, evaluation, pictures))
+    std::printf("%s\n", path.c_str());
+  for (const char* file : {"preview.png", "convergence.png"})
+    if (std::filesystem::exists(std::filesystem::path(result_dir) / file))
+      std::printf("%s\n", (std::filesystem::path(result_dir) / file).string().c_str());
+  std::printf("viewer: python3 -m http.server -d %s, then open http://127.0.0.1:8000/viewer.html\n",
+              result_dir.c_str());
   return kExitOk;
 }
 

@@ -8,6 +8,7 @@
 
 #include "client/args.h"
 #include "client/command.h"
+#include "client/eval_pictures.h"
 #include "client/eval_report_format.h"
 #include "core/common/error.h"
 #include "core/common/gdal_init.h"
@@ -17,7 +18,7 @@ namespace satmesh::cli {
 namespace {
 
 constexpr const char* kUsage =
-    "usage: satmesh eval --scene DIR --result MESH_OR_DIR [--json OUT]\n"
+    "usage: satmesh eval --scene DIR --result MESH_OR_DIR [--json OUT] [--pictures DIR]\n"
     "  --scene DIR              synthetic scene (truth/, initial/; see satmesh synth)\n"
     "  --result PATH            result mesh (PLY/OBJ, scene CRS) or a directory with mesh.ply\n"
     "  --json OUT               write the report as JSON\n"
@@ -26,7 +27,11 @@ constexpr const char* kUsage =
     "  --facade-max-abs-nz D    facade: |n_z| below this (default 0.3)\n"
     "  --distance-backend B     embree | cgal (default embree)\n"
     "  --align-on-mask          estimate the alignment on the roof mask only\n"
-    "  --no-3d                  skip the 3D metrics\n";
+    "  --no-3d                  skip the 3D metrics\n"
+    "  --pictures DIR           write DIR/height_error.png (initial and result minus the truth,\n"
+    "                           one colour scale) and DIR/zncc.png (a result directory's ZNCC\n"
+    "                           per iteration and level)\n"
+    "  --error-range-m D        colour scale of the height error maps: +-D m (default 2)\n";
 
 int RunEval(const std::vector<std::string>& argv) {
   const Args args(argv, {"help", "align-on-mask", "no-3d"});
@@ -64,6 +69,11 @@ int RunEval(const std::vector<std::string>& argv) {
     SATMESH_CHECK(f.good(), ErrorCode::kIo, "cannot write --json file '" + *out + "'");
     f << j.dump(2) << "\n";
     SATMESH_CHECK(f.good(), ErrorCode::kIo, "writing --json file '" + *out + "' failed");
+  }
+  if (auto dir = args.Get("pictures")) {
+    for (const auto& path : WriteEvalPictures(args.Require("scene"), args.Require("result"), e, *dir,
+                                              args.GetDouble("error-range-m", 2.0)))
+      std::printf("picture: %s\n", path.c_str());
   }
   return kExitOk;
 }

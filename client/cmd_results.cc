@@ -5,6 +5,7 @@
 
 #include "client/args.h"
 #include "client/command.h"
+#include "client/refine_runner.h"
 #include "client/remote_client.h"
 
 namespace satmesh::cli {
@@ -15,7 +16,8 @@ int RunResults(const std::vector<std::string>& argv) {
   const Args args(argv, {"help"});
   if (args.Has("help") || args.positionals().size() != 1 || !args.Has("out")) {
     std::printf("usage: satmesh results ID --out DIR [--server URL] [--token T]\n"
-                "  Downloads tileset.json, tiles/*.glb, metrics.json, mesh.ply and dsm.tif.\n"
+                "  Downloads tileset.json, tiles/*.glb, metrics.json, mesh.ply, dsm.tif, preview.png and\n"
+                "  convergence.png, and writes viewer.html (+ a Cesium link) as satmesh refine does.\n"
                 "  Exit 4 while the job is not done (result-not-ready), 3 when it failed.\n");
     return args.Has("help") ? kExitOk : kExitUsage;
   }
@@ -29,7 +31,7 @@ int RunResults(const std::vector<std::string>& argv) {
     const auto results = response.Json();
     fs::create_directories(out / "tiles");
     size_t files = 0, bytes = 0;
-    for (const char* name : {"tileset", "metrics", "mesh", "dsm"}) {
+    for (const char* name : {"tileset", "metrics", "mesh", "dsm", "preview", "convergence"}) {
       if (!results.contains(name) || !results[name].contains("href")) continue;
       const std::string href = results[name]["href"];
       bytes += client.Download(href, (out / fs::path(href).filename()).string());
@@ -42,6 +44,7 @@ int RunResults(const std::vector<std::string>& argv) {
       ++files;
     }
     std::printf("%zu files, %zu bytes -> %s\n", files, bytes, out.string().c_str());
+    WriteViewer(out.string());  // the downloaded tileset, viewable as refine's
     return int(kExitOk);
   });
 }

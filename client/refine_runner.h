@@ -17,4 +17,9 @@ JobSpec ReadJobWithOverrides(const std::string& job_path, const std::vector<std:
 JobOutputs RunJobFile(const std::string& job_path, const std::string& out_dir,
                       const std::vector<std::string>& overrides);
 
+// Writes out_dir/viewer.html and the link out_dir/Cesium (from SATMESH_VIEWER_DIR, else the
+// build's viewer folder) so that a static file server in out_dir shows out_dir/tileset.json;
+// warns and writes nothing when the viewer folder is missing.
+void WriteViewer(const std::string& out_dir);
+
 }  // namespace satmesh::cli

@@ -1,7 +1,10 @@
 #include "proto/job_spec_json.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <map>
 
 #include "core/common/error.h"
 
@@ -240,6 +243,127 @@ json LevelsToJson(const std::vector<LevelStats>& levels) {
   return out;
 }
 
+json PairsToJson(const std::vector<StereoPair>& pairs) {
+  json out = json::array();
+  for (const auto& p : pairs)
+    out.push_back({{"views", {p.i, p.j}}, {"angle_deg", p.angle_deg}, {"overlap", p.overlap}, {"score", p.score}});
+  return out;
+}
+
+double NumberOr(const json& j, const char* key, double fallback) {
+  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
+}
+
+std::vector<LevelStats> LevelsFromJson(const json& levels) {
+  std::vector<LevelStats> out;
+  for (const auto& l : levels) {
+    LevelStats s;
+    s.level = l.value("level", 0);
+    s.iterations = l.value("iterations", 0);
+    s.gsd_m = l.value("gsd_m", 0.0);
+    s.num_vertices = l.value("vertices", 0);
+    s.num_faces = l.value("faces", 0);
+    s.mean_zncc = l.value("mean_zncc", std::vector<double>{});
+    s.initial_zncc = NumberOr(l, "initial_zncc", std::numeric_limits<double>::quiet_NaN());
+    s.restarted = l.value("restarted_from_initial", false);
+    if (l.contains("time_s")) {
+      const json& t = l["time_s"];
+      s.times.hit_maps_s = t.value("hit_maps", 0.0);
+      s.times.intersect_s = t.value("intersect", 0.0);
+      s.times.gradient_s = t.value("gradient", 0.0);
+      s.times.smoothness_s = t.value("smoothness", 0.0);
+      s.times.update_s = t.value("update", 0.0);
+      s.initial_check_s = t.value("initial_check", 0.0);
+      s.level_s = t.value("level", 0.0);
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+// The job-level refinement summary of a tiled job, from its successful tiles: views (the
+// union, in order of appearance), pairs (by view name; angle, overlap, score averaged over
+// the tiles that selected them; "tiles": how many), the GSD (mean), the candidate pairs
+// (most of any tile) and per level: vertices, faces, iterations and times summed, GSD
+// averaged, mean ZNCC per iteration weighted by each tile's faces. A single tile's summary
+// is its own.
+struct JobRefineSummary {
+  std::vector<std::string> views;
+  json pairs = json::array();
+  double gsd_m = 0;
+  int candidate_pairs = 0;
+  std::vector<LevelStats> levels;
+};
+
+JobRefineSummary SummariseTiles(const std::vector<TileResult>& tiles) {
+  JobRefineSummary out;
+  std::map<std::pair<int, int>, std::pair<StereoPair, int>> pairs;  // by job view index
+  std::map<int, std::pair<LevelStats, std::vector<double>>> levels;    // by level: sum, weight per iteration
+  int n = 0;
+  for (const auto& t : tiles) {
+    if (!t.ok) continue;
+    ++n;
+    out.gsd_m += t.refine.gsd_m;
+    out.candidate_pairs = std::max(out.candidate_pairs, t.refine.candidate_pairs);
+    std::vector<int> index;  // tile view -> job view
+    for (const auto& name : t.view_names) {
+      const auto it = std::find(out.views.begin(), out.views.end(), name);
+      index.push_back(int(it - out.views.begin()));
+      if (it == out.views.end()) out.views.push_back(name);
+    }
+    for (const auto& p : t.refine.pair_details) {
+      if (p.i < 0 || p.j < 0 || p.i >= int(index.size()) || p.j >= int(index.size())) continue;
+      const auto key = std::minmax(index[p.i], index[p.j]);
+      auto& [sum, count] = pairs[key];
+      sum.i = key.first, sum.j = key.second;
+      sum.angle_deg += p.angle_deg, sum.overlap += p.overlap, sum.score += p.score;
+      ++count;
+    }
+    for (const auto& l : t.refine.levels) {
+      auto& [sum, weight] = levels[l.level];
+      const bool first = weight.empty() && sum.iterations == 0 && sum.num_faces == 0;
+      sum.level = l.level;
+      sum.iterations = std::max(sum.iterations, l.iterations);
+      sum.num_vertices += l.num_vertices;
+      sum.num_faces += l.num_faces;
+      sum.gsd_m += l.gsd_m;
+      sum.restarted = sum.restarted || l.restarted;
+      sum.initial_check_s += l.initial_check_s;
+      sum.level_s += l.level_s;
+      sum.times.hit_maps_s += l.times.hit_maps_s;
+      sum.times.intersect_s += l.times.intersect_s;
+      sum.times.gradient_s += l.times.gradient_s;
+      sum.times.smoothness_s += l.times.smoothness_s;
+      sum.times.update_s += l.times.update_s;
+      const double w = std::max(1, l.num_faces);
+      if (first) sum.mean_zncc.assign(l.mean_zncc.size(), 0.0), weight.assign(l.mean_zncc.size(), 0.0);
+      const size_t k_max = std::min(sum.mean_zncc.size(), l.mean_zncc.size());
+      sum.mean_zncc.resize(k_max), weight.resize(k_max);  // tiles that stopped early: common part
+      for (size_t k = 0; k < k_max; ++k) sum.mean_zncc[k] += w * l.mean_zncc[k], weight[k] += w;
+      // Compared per tile: one tile's value stands, several have none in common.
+      sum.initial_zncc = first ? l.initial_zncc : std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+  if (n > 0) out.gsd_m /= n;
+  for (const auto& [key, value] : pairs) {
+    const auto& [sum, count] = value;
+    out.pairs.push_back({{"views", {key.first, key.second}}, {"angle_deg", sum.angle_deg / count},
+                         {"overlap", sum.overlap / count}, {"score", sum.score / count}, {"tiles", count}});
+  }
+  for (auto& [level, value] : levels) {
+    auto& [sum, weight] = value;
+    int tiles_at_level = 0;
+    for (const auto& t : tiles)
+      for (const auto& l : t.refine.levels) tiles_at_level += t.ok && l.level == level;
+    sum.gsd_m /= std::max(1, tiles_at_level);
+    for (size_t k = 0; k < sum.mean_zncc.size(); ++k) sum.mean_zncc[k] /= weight[k];
+    out.levels.push_back(sum);
+  }
+  // Coarse to fine, as a tile lists them.
+  std::sort(out.levels.begin(), out.levels.end(), [](const auto& a, const auto& b) { return a.level > b.level; });
+  return out;
+}
+
 // Estimated RPC bias per view: [[col, row], ...] in full-resolution pixels.
 json BiasesToJson(const std::vector<Eigen::Vector2d>& biases) {
   json out = json::array();
@@ -280,6 +404,9 @@ json TileResultToJson(const JobPlan& plan, const TileResult& t) {
   j["views"] = t.view_names;
   j["dropped_views"] = t.dropped_views;
   j["pairs"] = t.refine.pairs.size();
+  j["pair_details"] = PairsToJson(t.refine.pair_details);  // views: indices into "views"
+  j["candidate_pairs"] = t.refine.candidate_pairs;
+  j["gsd_m"] = t.refine.gsd_m;
   j["vertices"] = t.core_vertices;
   j["faces"] = t.core_faces;
   j["image_mb"] = t.image_mb;
@@ -311,6 +438,20 @@ TileResult TileResultFromJson(const JobPlan& plan, const json& j) {
   t.core_faces = j.value("faces", size_t{0});
   t.image_mb = j.value("image_mb", 0.0);
   t.peak_rss_mb = j.value("peak_rss_mb", 0.0);
+  t.refine.gsd_m = j.value("gsd_m", 0.0);
+  t.refine.candidate_pairs = j.value("candidate_pairs", 0);
+  for (const auto& p : j.value("pair_details", json::array())) {
+    StereoPair pair;
+    pair.i = p.at("views").at(0).get<int>();
+    pair.j = p.at("views").at(1).get<int>();
+    pair.angle_deg = p.value("angle_deg", 0.0);
+    pair.overlap = p.value("overlap", 0.0);
+    pair.score = p.value("score", 0.0);
+    t.refine.pair_details.push_back(pair);
+    t.refine.pairs.emplace_back(pair.i, pair.j);
+  }
+  t.refine.levels = LevelsFromJson(j.value("levels", json::array()));
+  for (const auto& b : j.value("bias_px", json::array())) t.view_bias_px.emplace_back(b.at(0).get<double>(), b.at(1).get<double>());
   if (j.contains("time_s")) {
     t.prepare_s = j["time_s"].value("prepare", 0.0);
     t.bias_s = j["time_s"].value("bias", 0.0);
@@ -347,16 +488,26 @@ json JobMetricsToJson(const JobOutputs& o) {
   }
   json seams = json::array();
   for (const auto& s : o.assembly.seams) seams.push_back(SeamToJson(s));
-  json pairs = json::array();
-  for (const auto& p : o.refine.pair_details)
-    pairs.push_back({{"views", {p.i, p.j}}, {"angle_deg", p.angle_deg}, {"overlap", p.overlap},
-                     {"score", p.score}});
+  // One tile: its own refinement (the mesh-holding result where RunJob kept it); several:
+  // summed over them (SummariseTiles).
+  JobRefineSummary summary;
+  if (o.tiles.size() == 1 && !o.refine.levels.empty()) {
+    summary.views = o.view_names;
+    summary.pairs = PairsToJson(o.refine.pair_details);
+    summary.gsd_m = o.refine.gsd_m;
+    summary.candidate_pairs = o.refine.candidate_pairs;
+    summary.levels = o.refine.levels;
+  } else {
+    summary = SummariseTiles(o.tiles);
+  }
+  double peak_rss_mb = o.peak_rss_mb;  // the process's; the server's tiles report their own
+  for (const auto& t : o.tiles) peak_rss_mb = std::max(peak_rss_mb, t.peak_rss_mb);
   const double cell = o.plan.dsm.geo_transform[1];
-  json metrics = {{"views", o.view_names},  // single-tile jobs (as before tiling)
-          {"pairs", pairs},
-          {"candidate_pairs", o.refine.candidate_pairs},
-          {"gsd_m", o.refine.gsd_m},
-          {"levels", LevelsToJson(o.refine.levels)},
+  json metrics = {{"views", summary.views},
+          {"pairs", summary.pairs},
+          {"candidate_pairs", summary.candidate_pairs},
+          {"gsd_m", summary.gsd_m},
+          {"levels", LevelsToJson(summary.levels)},
           {"tiling", {{"grid", {o.plan.nx, o.plan.ny}},
                       {"cell_m", cell},
                       {"tile_m", o.plan.tile_cells * cell},
@@ -371,7 +522,7 @@ json JobMetricsToJson(const JobOutputs& o) {
                       {"vertices", o.assembly.vertices},
                       {"faces", o.assembly.faces},
                       {"max_tile_image_mb", max_image_mb},
-                      {"peak_rss_mb", o.peak_rss_mb}}},
+                      {"peak_rss_mb", peak_rss_mb}}},
           {"time_s", {{"plan", o.plan_s}, {"tiles", o.tiles_s}, {"prepare", o.prepare_s},
                       {"refine", refine_s}, {"write", o.write_s}, {"total", o.total_s}}},
           {"outputs", {{"mesh", "mesh.ply"}, {"dsm", "dsm.tif"}, {"tileset", "tileset.json"},

@@ -151,6 +151,10 @@ if [ -n "$ccache_dir" ]; then
   mkdir -p "$ccache_dir"
   volume=(--volume "$(cd "$ccache_dir" && pwd):/ccache")
 fi
+# The host's CA certificates for the build's npm ci (on a network that inspects TLS, the
+# host trusts its CA; apt fetches over plain HTTP and needs none). Mounted, not copied.
+host_ca=/etc/ssl/certs/ca-certificates.crt
+[ -r "$host_ca" ] && volume+=(--volume "$host_ca:/host-ca-certificates.crt:ro")
 echo "build-image: building $tag from ${git_rev:-the working tree} (niced, -j$jobs${ccache_dir:+, ccache $ccache_dir})"
 cd "$context"
 nice -n 10 buildah bud --isolation chroot --layers --pull=never --format docker "${volume[@]}" \

@@ -2,7 +2,8 @@
 # Smoke test of the satmesh image (scripts/build-image.sh) without a container engine:
 # buildah runs satmesh-server from the image (chroot isolation, host loopback) with a data
 # dir and an input root; checks /health and /processes, submits the small synthetic job
-# with the image's own CLI, downloads its results, then stops the server. Exits non-zero
+# with the image's own CLI, downloads its results, checks the job viewer (page, CesiumJS,
+# live tileset), then stops the server. Exits non-zero
 # on the first failure. Run as root.
 #
 #   scripts/smoke-image.sh [--tag localhost/satmesh:latest] [--port 18080] [--no-job]
@@ -125,13 +126,19 @@ if [ "$job" -eq 1 ]; then
   echo "smoke-image: job $id: $(tail -1 "$work/submit.log")"
   in_client satmesh results "$id" --server "$url" --out /inputs/result >"$work/results.log" 2>&1 \
     || { cat "$work/results.log" >&2; fail "satmesh results"; }
-  for f in tileset.json metrics.json; do
+  for f in tileset.json metrics.json preview.png convergence.png viewer.html; do
     [ -s "$work/inputs/result/$f" ] || fail "results: no $f"
   done
   ls "$work/inputs/result/tiles/"*.glb >/dev/null 2>&1 || fail "results: no tiles/*.glb"
   [ "$(stat -c %u "$work/data/jobs" 2>/dev/null || stat -c %u "$work/data")" = 10001 ] \
     || fail "the server did not write its data as uid 10001"
   echo "smoke-image: results: $(ls "$work/inputs/result" | tr '\n' ' ')"
+  # The job viewer: its page, the CesiumJS the image carries, the live tileset.
+  curl -fsS "$url/jobs/$id/viewer" | grep -q 'Cesium.js' || fail "GET /jobs/$id/viewer"
+  cesium_bytes=$(curl -fsS "$url/viewer/Cesium/Cesium.js" | wc -c) || fail "GET /viewer/Cesium/Cesium.js"
+  [ "$cesium_bytes" -gt 1000000 ] || fail "/viewer/Cesium/Cesium.js has $cesium_bytes bytes"
+  curl -fsS "$url/jobs/$id/tileset.json" | grep -q '"tiles_done"' || fail "GET /jobs/$id/tileset.json"
+  echo "smoke-image: viewer page, CesiumJS ($cesium_bytes bytes) and live tileset served"
 fi
 
 stop_server || fail "cannot stop the server"

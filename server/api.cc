@@ -6,7 +6,9 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
+#include <regex>
 #include <thread>
 
 #include "core/common/error.h"
@@ -20,7 +22,10 @@ using nlohmann::json;
 
 namespace {
 
-void SendJson(httplib::Response& res, const json& body, int status = 200) {
+void MakeLinksAbsolute(const httplib::Request& req, json* body);
+
+void SendJson(const httplib::Request& req, httplib::Response& res, json body, int status = 200) {
+  MakeLinksAbsolute(req, &body);
   res.status = status;
   res.set_content(body.dump(), "application/json");
 }
@@ -41,6 +46,7 @@ std::string ContentType(const std::string& file) {
   if (ext == ".glb") return "model/gltf-binary";
   if (ext == ".json") return "application/json";
   if (ext == ".tif") return "image/tiff";
+  if (ext == ".png") return "image/png";
   return "application/octet-stream";
 }
 
@@ -50,6 +56,51 @@ void SendFile(httplib::Response& res, const fs::path& path) {
   std::ostringstream data;
   data << in.rdbuf();
   res.set_content(data.str(), ContentType(path.string()));
+}
+
+// The methods each route answers (HEAD goes with GET; OPTIONS with every route): the one
+// table behind 405 + Allow and the CORS preflight. Empty: no such route (404).
+std::string AllowedMethods(const std::string& path) {
+  static const std::regex get_only(
+      R"(/|/conformance|/api|/health|/metrics|/processes|/processes/[^/]+|/jobs/[^/]+/(tiles|results|events|viewer|tileset\.json)|/jobs/[^/]+(/results)?/tiles/\d{1,6}_\d{1,6}\.glb|/jobs/[^/]+/results/[^/]+|/viewer/.+)");
+  static const std::regex post(R"(/processes/[^/]+/execution)");
+  static const std::regex get_delete(R"(/jobs/[^/]+)");
+  if (std::regex_match(path, get_only) || path == "/jobs") return "GET, HEAD, OPTIONS";
+  if (std::regex_match(path, post)) return "POST, OPTIONS";
+  if (std::regex_match(path, get_delete)) return "GET, HEAD, DELETE, OPTIONS";
+  return "";
+}
+
+// Pages a browser opens by navigating (no Authorization header): the viewer page (the
+// same for every job; it sends the token itself) and CesiumJS.
+bool IsPublicPage(const std::string& path) {
+  static const std::regex viewer(R"(/jobs/[^/]+/viewer)");
+  return path == "/health" || path.rfind("/viewer/", 0) == 0 || std::regex_match(path, viewer);
+}
+
+// Links of JSON documents as absolute URLs (OGC API clients such as OWSLib follow them
+// as they are), from the request's Host (and X-Forwarded-Proto behind a proxy).
+void MakeLinksAbsolute(const httplib::Request& req, json* body) {
+  if (!req.has_header("Host")) return;
+  const std::string proto = req.has_header("X-Forwarded-Proto") ? req.get_header_value("X-Forwarded-Proto") : "http";
+  const std::string base = proto + "://" + req.get_header_value("Host");
+  const std::function<void(json&)> visit = [&](json& j) {
+    if (j.is_array()) {
+      for (auto& e : j) visit(e);
+    } else if (j.is_object()) {
+      for (auto& [key, value] : j.items()) {
+        if (key == "links" && value.is_array()) {
+          for (auto& link : value)
+            if (link.is_object() && link.contains("href") && link["href"].is_string() &&
+                link["href"].get<std::string>().rfind("/", 0) == 0)
+              link["href"] = base + link["href"].get<std::string>();
+        } else if (key != "schema") {  // the process description's job schema: as it is
+          visit(value);
+        }
+      }
+    }
+  };
+  visit(*body);
 }
 
 [[noreturn]] void NoSuchJob(const std::string& id) {
@@ -64,6 +115,11 @@ std::string ServerOptions::Check() const {
   if (max_body_bytes < 1024) return "max_body_bytes: must be >= 1024";
   if (http_threads < 1 || http_threads > 1024) return "http_threads: not in [1, 1024]";
   if (max_stream_s < 1) return "max_stream_s: must be >= 1";
+  for (const auto& origin : cors_origins) {
+    const bool ok = origin == "*" || ((origin.rfind("http://", 0) == 0 || origin.rfind("https://", 0) == 0) &&
+                                      origin.find('/', origin.find("//") + 2) == std::string::npos);
+    if (!ok) return "cors_origins: '" + origin + "' is not '*' or an origin (scheme://host[:port], no path)";
+  }
   std::string p = inputs.Check();
   if (!p.empty()) return p;
   return scheduler.Check();
@@ -77,6 +133,7 @@ struct ApiServer::Impl {
   httplib::Server http;
   std::thread listener;
   json job_schema, openapi;
+  std::string viewer_dir, viewer_page;
 
   Impl(const ServerOptions& o, JobExecutor* e)
       : options(o), executor(e), store(o.data_dir), scheduler(&store, e, o.scheduler) {}
@@ -97,7 +154,13 @@ struct ApiServer::Impl {
     } catch (const json::parse_error& e) {
       throw HttpError(400, "invalid-json", std::string("request body: ") + e.what());
     }
+    // OGC API - Processes: {"inputs": {"job": JOB}} as the process description declares;
+    // also accepted: {"inputs": JOB} and JOB itself.
     json job = body.is_object() && body.contains("inputs") ? body["inputs"] : body;
+    if (job.is_object() && job.size() == 1 && job.contains("job")) {
+      job = json(job["job"]);
+      if (!job.is_object()) throw HttpError(400, "bad-request", "inputs.job: must be an object (the job)");
+    }
     ResolveHrefs(&job, options.inputs);
     const JobSpec spec = proto::JobSpecFromJson(job, "/");
     const std::string problem = spec.Check();
@@ -113,10 +176,10 @@ struct ApiServer::Impl {
       throw HttpError(422, "idempotency-key-reused", "Idempotency-Key '" + key + "' was used for a different job");
     res.set_header("Location", "/jobs/" + record.id);
     res.set_header("Preference-Applied", "respond-async");
-    SendJson(res, StatusInfo(record), created ? 201 : 200);
+    SendJson(req, res, StatusInfo(record), created ? 201 : 200);
   }
 
-  void Results(const std::string& id, httplib::Response& res) const {
+  void Results(const httplib::Request& req, const std::string& id, httplib::Response& res) const {
     const JobRecord job = RequireJob(id);
     if (job.status == JobStatus::kAccepted || job.status == JobStatus::kRunning)
       throw HttpError(404, "result-not-ready", "job '" + id + "' is " + JobStatusName(job.status));
@@ -126,7 +189,7 @@ struct ApiServer::Impl {
     const std::string base = "/jobs/" + id + "/results/";
     json links = json::array();
     json out = {{"jobID", id}};
-    for (const char* file : {"tileset.json", "metrics.json", "mesh.ply", "dsm.tif"}) {
+    for (const char* file : {"tileset.json", "metrics.json", "mesh.ply", "dsm.tif", "preview.png", "convergence.png"}) {
       if (!fs::exists(dir / file)) continue;
       const std::string name = fs::path(file).stem().string();
       out[name] = {{"href", base + file}, {"type", ContentType(file)}};
@@ -135,7 +198,7 @@ struct ApiServer::Impl {
     if (fs::exists(dir / "metrics.json")) out["metrics"]["value"] = ReadJsonFile((dir / "metrics.json").string());
     out["tiles"] = TileList(job)["tiles"];
     out["links"] = links;
-    SendJson(res, out);
+    SendJson(req, res, out);
   }
 
   void Stream(const std::string& id, httplib::Response& res) {
@@ -157,25 +220,25 @@ struct ApiServer::Impl {
   }
 
   void Routes() {
-    http.Get("/", [](const auto&, auto& res) { SendJson(res, LandingPage()); });
-    http.Get("/conformance", [](const auto&, auto& res) { SendJson(res, Conformance()); });
-    http.Get("/api", [this](const auto&, auto& res) { SendJson(res, openapi); });
-    http.Get("/health", [this](const auto&, auto& res) {
+    http.Get("/", [](const auto& req, auto& res) { SendJson(req, res, LandingPage()); });
+    http.Get("/conformance", [](const auto& req, auto& res) { SendJson(req, res, Conformance()); });
+    http.Get("/api", [this](const auto& req, auto& res) { SendJson(req, res, openapi); });
+    http.Get("/health", [this](const auto& req, auto& res) {
       const auto s = scheduler.Stats();
-      SendJson(res, {{"status", "ok"}, {"workers", options.scheduler.workers},
+      SendJson(req, res, {{"status", "ok"}, {"workers", options.scheduler.workers},
                      {"tiles_queued", s.tiles_queued}, {"tiles_running", s.tiles_running}});
     });
-    http.Get("/metrics", [this](const auto&, auto& res) {
+    http.Get("/metrics", [this](const auto& req, auto& res) {
       res.set_content(PrometheusText(scheduler.Stats()), "text/plain; version=0.0.4");
     });
-    http.Get("/processes", [](const auto&, auto& res) {
-      SendJson(res, {{"processes", json::array({ProcessSummary()})},
+    http.Get("/processes", [](const auto& req, auto& res) {
+      SendJson(req, res, {{"processes", json::array({ProcessSummary()})},
                      {"links", json::array({{{"href", "/processes"}, {"rel", "self"}}})}});
     });
     http.Get(R"(/processes/([^/]+))", [this](const auto& req, auto& res) {
       if (req.matches[1] != kProcessId)
         throw HttpError(404, "no-such-process", "no process '" + std::string(req.matches[1]) + "'");
-      SendJson(res, ProcessDescription(job_schema));
+      SendJson(req, res, ProcessDescription(job_schema));
     });
     http.Post(R"(/processes/([^/]+)/execution)", [this](const auto& req, auto& res) {
       if (req.matches[1] != kProcessId)
@@ -194,18 +257,18 @@ struct ApiServer::Impl {
       }
       json jobs = json::array();
       for (const auto& job : scheduler.List(status, limit)) jobs.push_back(StatusInfo(job));
-      SendJson(res, {{"jobs", jobs}, {"links", json::array({{{"href", "/jobs"}, {"rel", "self"}}})}});
+      SendJson(req, res, {{"jobs", jobs}, {"links", json::array({{{"href", "/jobs"}, {"rel", "self"}}})}});
     });
     http.Get(R"(/jobs/([^/]+))", [this](const auto& req, auto& res) {
-      SendJson(res, StatusInfo(RequireJob(req.matches[1])));
+      SendJson(req, res, StatusInfo(RequireJob(req.matches[1])));
     });
     http.Delete(R"(/jobs/([^/]+))", [this](const auto& req, auto& res) {
       const auto job = scheduler.Dismiss(req.matches[1]);
       if (!job) NoSuchJob(req.matches[1]);
-      SendJson(res, StatusInfo(*job));
+      SendJson(req, res, StatusInfo(*job));
     });
     http.Get(R"(/jobs/([^/]+)/tiles)", [this](const auto& req, auto& res) {
-      SendJson(res, TileList(RequireJob(req.matches[1])));
+      SendJson(req, res, TileList(RequireJob(req.matches[1])));
     });
     http.Get(R"(/jobs/([^/]+)(?:/results)?/tiles/(\d{1,6})_(\d{1,6})\.glb)", [this](const auto& req, auto& res) {
       const JobRecord job = RequireJob(req.matches[1]);
@@ -218,8 +281,8 @@ struct ApiServer::Impl {
       }
       throw HttpError(404, "no-such-tile", "job '" + job.id + "' has no tile " + key.Name());
     });
-    http.Get(R"(/jobs/([^/]+)/results)", [this](const auto& req, auto& res) { Results(req.matches[1], res); });
-    http.Get(R"(/jobs/([^/]+)/results/(tileset\.json|metrics\.json|mesh\.ply|dsm\.tif))",
+    http.Get(R"(/jobs/([^/]+)/results)", [this](const auto& req, auto& res) { Results(req, req.matches[1], res); });
+    http.Get(R"(/jobs/([^/]+)/results/(tileset\.json|metrics\.json|mesh\.ply|dsm\.tif|preview\.png|convergence\.png))",
              [this](const auto& req, auto& res) {
                const JobRecord job = RequireJob(req.matches[1]);
                if (job.status != JobStatus::kSuccessful)
@@ -229,6 +292,55 @@ struct ApiServer::Impl {
                SendFile(res, file);
              });
     http.Get(R"(/jobs/([^/]+)/events)", [this](const auto& req, auto& res) { Stream(req.matches[1], res); });
+    http.Get(R"(/jobs/([^/]+)/tileset\.json)", [this](const auto& req, auto& res) {
+      const JobRecord job = RequireJob(req.matches[1]);
+      if (job.status == JobStatus::kDismissed) throw HttpError(410, "job-dismissed", "job '" + job.id + "' was dismissed");
+      res.set_header("Cache-Control", "no-cache");
+      SendJson(req, res, LiveTileset(job));
+    });
+    http.Get(R"(/jobs/([^/]+)/viewer)", [this](const auto& req, auto& res) {
+      RequireJob(req.matches[1]);
+      res.set_content(viewer_page, "text/html; charset=utf-8");
+    });
+    // CesiumJS's scripts as a JavaScript MIME type httplib does not compress: it would
+    // Brotli-compress every request at quality 11 (Cesium.js: 11 s instead of 0.04 s).
+    http.set_file_extension_and_mimetype_mapping("js", "application/x-javascript");
+    SATMESH_CHECK(http.set_mount_point("/viewer/Cesium", viewer_dir + "/Cesium"), ErrorCode::kIo,
+                  "viewer: cannot serve '" + viewer_dir + "/Cesium'");
+  }
+
+  // CORS: allowed origins get Access-Control-Allow-Origin on every answer; preflights
+  // (OPTIONS with Access-Control-Request-Method) are answered here, before authentication.
+  // Returns true when the request is answered.
+  bool AnswerCorsAndMethods(const httplib::Request& req, httplib::Response& res) const {
+    const std::string origin = req.get_header_value("Origin");
+    bool allowed_origin = false;
+    for (const auto& o : options.cors_origins) allowed_origin = allowed_origin || o == "*" || o == origin;
+    if (!origin.empty() && allowed_origin) {
+      const bool any = std::find(options.cors_origins.begin(), options.cors_origins.end(), "*") != options.cors_origins.end();
+      res.set_header("Access-Control-Allow-Origin", any ? "*" : origin);
+      if (!any) res.set_header("Vary", "Origin");
+      res.set_header("Access-Control-Expose-Headers", "Location, Preference-Applied, Content-Length");
+    }
+    const std::string allow = AllowedMethods(req.path);
+    if (allow.empty()) return false;  // 404 from the router
+    if (req.method == "OPTIONS") {
+      res.status = 204;
+      res.set_header("Allow", allow);
+      if (allowed_origin && req.has_header("Access-Control-Request-Method")) {
+        res.set_header("Access-Control-Allow-Methods", allow);
+        res.set_header("Access-Control-Allow-Headers",
+                       "Authorization, Content-Type, Idempotency-Key, Prefer, Cache-Control, Last-Event-ID");
+        res.set_header("Access-Control-Max-Age", "600");
+      }
+      return true;
+    }
+    const bool listed = (", " + allow + ",").find(", " + req.method + ",") != std::string::npos;
+    if (listed) return false;
+    res.set_header("Allow", allow);
+    SendProblem(res, {405, {{"type", ProblemTypeUri("method-not-allowed")}, {"title", "Method Not Allowed"},
+                            {"status", 405}, {"detail", req.method + " " + req.path + ": allowed: " + allow}}});
+    return true;
   }
 
   void Hooks() {
@@ -250,7 +362,8 @@ struct ApiServer::Impl {
       return httplib::Server::HandlerResponse::Handled;
     }));
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-      if (options.token.empty() || req.path == "/health") return httplib::Server::HandlerResponse::Unhandled;
+      if (AnswerCorsAndMethods(req, res)) return httplib::Server::HandlerResponse::Handled;
+      if (options.token.empty() || IsPublicPage(req.path)) return httplib::Server::HandlerResponse::Unhandled;
       const std::string auth = req.get_header_value("Authorization");
       const std::string prefix = "Bearer ";
       if (auth.rfind(prefix, 0) == 0 && ConstantTimeEquals(auth.substr(prefix.size()), options.token))
@@ -270,6 +383,13 @@ ApiServer::ApiServer(const ServerOptions& options, JobExecutor* executor)
   const std::string proto = options.proto_dir.empty() ? SATMESH_PROTO_DIR : options.proto_dir;
   impl_->job_schema = ReadJsonFile(proto + "/job.schema.json");
   impl_->openapi = ReadJsonFile(proto + "/openapi.json");
+  impl_->viewer_dir = options.viewer_dir.empty() ? SATMESH_VIEWER_DIR : options.viewer_dir;
+  std::ifstream page(impl_->viewer_dir + "/viewer.html");
+  SATMESH_CHECK(page.good() && fs::exists(impl_->viewer_dir + "/Cesium/Cesium.js"), ErrorCode::kNotFound,
+                "viewer_dir: '" + impl_->viewer_dir + "' has no viewer.html and Cesium/Cesium.js");
+  std::ostringstream text;
+  text << page.rdbuf();
+  impl_->viewer_page = text.str();
 }
 
 ApiServer::~ApiServer() { Stop(); }

@@ -3,6 +3,7 @@
 // JobExecutor through the Scheduler. Routes in api.cc, documents in api_documents.cc.
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "server/executor.h"
 #include "server/inputs.h"
@@ -15,7 +16,11 @@ struct ServerOptions {
   int port = 8080;                       // TCP port, 0 = any free port
   std::string data_dir = "satmesh-data"; // job store root
   std::string proto_dir;                 // proto/ (schemas, OpenAPI); "" = the build's
+  std::string viewer_dir;                // viewer.html + Cesium/; "" = the build's
   std::string token;                     // bearer token; "" = no authentication
+  // Origins whose pages may call the API (CORS), e.g. "https://example.org"; "*" = any;
+  // none = no cross-origin access. Preflights (OPTIONS) need no token.
+  std::vector<std::string> cors_origins;
   size_t max_body_bytes = 1 << 20;       // request body limit, bytes, >= 1024
   int http_threads = 32;                 // concurrent HTTP connections served, [1, 1024]
   int max_stream_s = 3600;               // progress stream lifetime, s, >= 1

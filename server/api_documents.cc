@@ -1,9 +1,12 @@
 #include "server/api_documents.h"
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
 #include "core/common/error.h"
+#include "proto/job_spec_json.h"
 
 namespace satmesh::server {
 namespace {
@@ -66,6 +69,33 @@ json TileList(const JobRecord& job) {
   return {{"jobID", job.id}, {"tiles", tiles}};
 }
 
+json LiveTileset(const JobRecord& job) {
+  Tileset ts;
+  ts.region = {1e300, 1e300, -1e300, -1e300, 1e300, -1e300};
+  for (const auto& t : job.tiles) {
+    if (t.status != TileStatus::kDone || !t.result.is_object() || !t.result.contains("region") ||
+        !t.result.contains("transform"))
+      continue;
+    TilesetTile tile;
+    tile.name = t.key.Name();
+    tile.uri = "tiles/" + t.key.Name() + ".glb";
+    for (size_t i = 0; i < 6; ++i) tile.region[i] = t.result["region"].at(i).get<double>();
+    for (size_t i = 0; i < 16; ++i) tile.transform[i] = t.result["transform"].at(i).get<double>();
+    for (int k : {0, 1, 4}) ts.region[k] = std::min(ts.region[k], tile.region[k]);
+    for (int k : {2, 3, 5}) ts.region[k] = std::max(ts.region[k], tile.region[k]);
+    ts.tiles.push_back(tile);
+  }
+  if (ts.tiles.empty()) ts.region = {0, 0, 0, 0, 0, 0};
+  // The root's geometric error: the region's larger side in metres (a viewer refines into
+  // the leaves whenever the root is on screen).
+  const double r = 6378137.0, lat = 0.5 * (ts.region[1] + ts.region[3]);
+  ts.geometric_error = std::max((ts.region[2] - ts.region[0]) * r * std::cos(lat), (ts.region[3] - ts.region[1]) * r);
+  json tileset = proto::TilesetToJson(ts);
+  tileset["extras"] = {{"jobID", job.id}, {"status", JobStatusName(job.status)},
+                       {"tiles_done", ts.tiles.size()}, {"tiles_total", job.tiles.size()}};
+  return tileset;
+}
+
 json LandingPage() {
   return {{"title", "satmesh"},
           {"description", "Photometric multi-view refinement of 3D city meshes from satellite "
@@ -102,10 +132,10 @@ json ProcessSummary() {
 json ProcessDescription(const json& job_schema) {
   json d = ProcessSummary();
   d["inputs"] = {{"job", {{"title", "job spec",},
-                          {"description", "The job, as the request body itself or under "
-                                          "\"inputs\"; hrefs are paths under the server's "
-                                          "data roots (relative to the first) or allowed "
-                                          "GDAL virtual paths."},
+                          {"description", "The job (execute request {\"inputs\": {\"job\": JOB}}; "
+                                          "{\"inputs\": JOB} and JOB as the body are accepted too); "
+                                          "hrefs are paths under the server's data roots (relative "
+                                          "to the first) or allowed GDAL virtual paths."},
                           {"schema", job_schema}}}};
   d["outputs"] = {{"tileset", {{"title", "3D Tiles 1.1 tileset.json with one .glb per tile"},
                                {"schema", {{"type", "string"}, {"contentMediaType", "application/json"}}}}},

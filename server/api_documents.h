@@ -15,6 +15,9 @@ constexpr const char* kProcessId = "refine-mesh";
 nlohmann::json StatusInfo(const JobRecord& job);
 // Per-tile list: key, status, progress, duration, href of the glb when done.
 nlohmann::json TileList(const JobRecord& job);
+// 3D Tiles 1.1 tileset of the job's tiles finished so far (from their records' region and
+// transform), content uris relative to /jobs/{id}/; extras: status, tiles_done/total.
+nlohmann::json LiveTileset(const JobRecord& job);
 nlohmann::json LandingPage();
 nlohmann::json Conformance();
 nlohmann::json ProcessSummary();

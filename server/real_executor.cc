@@ -1,6 +1,8 @@
 #include "server/real_executor.h"
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 
@@ -8,6 +10,7 @@
 #include "core/image/image_io.h"
 #include "core/mesh/mesh_io.h"
 #include "core/tiling/job.h"
+#include "proto/job_pictures.h"
 #include "proto/job_spec_json.h"
 #include "server/api_documents.h"
 
@@ -37,32 +40,8 @@ json BoundingBox(const TriangleMesh& mesh) {
   return json::array({c.x(), c.y(), c.z(), h.x(), 0, 0, 0, h.y(), 0, 0, 0, h.z()});
 }
 
-template <size_t N>
-std::array<double, N> ArrayFrom(const json& j) {
-  std::array<double, N> a{};
-  for (size_t i = 0; i < N && i < j.size(); ++i) a[i] = j[i].get<double>();
-  return a;
-}
-
-// The persisted tile record back into what AssembleOutputs reads.
-TileResult TileFromJson(const JobPlan& plan, const json& j) {
-  TileResult t;
-  t.index = plan.IndexOf(j.at("x"), j.at("y"));
-  SATMESH_CHECK(t.index >= 0, ErrorCode::kInternal, "tile " + j.value("name", std::string("?")) + " is not in the plan");
-  t.name = j.value("name", plan.tiles[t.index].Name());
-  t.ok = true;
-  t.region = ArrayFrom<6>(j.at("region"));
-  t.transform = ArrayFrom<16>(j.at("transform"));
-  t.core_vertices = j.value("vertices", size_t{0});
-  t.core_faces = j.value("faces", size_t{0});
-  t.view_names = j.value("views", std::vector<std::string>{});
-  t.image_mb = j.value("image_mb", 0.0);
-  if (j.contains("time_s")) {
-    t.prepare_s = j["time_s"].value("prepare", 0.0);
-    t.refine_s = j["time_s"].value("refine", 0.0);
-    t.write_s = j["time_s"].value("write", 0.0);
-  }
-  return t;
+double UnixSeconds() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
 }  // namespace
@@ -112,11 +91,11 @@ json RealExecutor::RunTile(const JobSpec& spec, const TileKey& key, const std::s
   const JobPlan plan = PlanJob(spec);
   const int index = plan.IndexOf(key.x, key.y);
   SATMESH_CHECK(index >= 0, ErrorCode::kInternal, "tile " + key.Name() + " is not in the job's plan");
+  const double started = UnixSeconds();
   const TileResult result = satmesh::RunTile(spec, plan, index, job_dir, progress);
   if (!result.ok) ThrowError(result.error_code, result.error);
   json record = proto::TileResultToJson(plan, result);
-  record["region"] = result.region;
-  record["transform"] = result.transform;
+  record["started_unix_s"] = started;  // the job's wall time at assembly: first start -> end
   return record;
 }
 
@@ -124,22 +103,25 @@ json RealExecutor::Assemble(const JobSpec& spec, const std::vector<TileKey>& til
                             const std::vector<json>& tile_results, const std::string& job_dir) {
   JobOutputs outputs;
   outputs.plan = PlanJob(spec);
-  for (const json& r : tile_results) outputs.tiles.push_back(TileFromJson(outputs.plan, r));
+  double first_start = UnixSeconds();
+  for (const json& r : tile_results) {
+    outputs.tiles.push_back(proto::TileResultFromJson(outputs.plan, r));
+    first_start = std::min(first_start, r.value("started_unix_s", first_start));
+  }
   outputs.assembly = AssembleOutputs(outputs.plan, outputs.tiles, job_dir);
   outputs.mesh_path = outputs.assembly.mesh_path;
   outputs.dsm_path = outputs.assembly.dsm_path;
-  if (outputs.tiles.size() == 1) outputs.view_names = outputs.tiles[0].view_names;
+  for (const auto& t : outputs.tiles) outputs.prepare_s += t.prepare_s, outputs.write_s += t.write_s;
+  outputs.write_s += outputs.assembly.assemble_s;
+  // Tiles ran on the server's workers, possibly across restarts: the job's time is from
+  // its first tile's start to now (queueing behind other jobs included).
+  outputs.total_s = UnixSeconds() - first_start;
+  outputs.tiles_s = outputs.total_s - outputs.assembly.assemble_s;
   json metrics = proto::JobMetricsToJson(outputs);
-  json full_tiles = json::array();  // as recorded when each tile ran (with its levels)
-  for (json r : tile_results) {
-    r.erase("region");
-    r.erase("transform");
-    full_tiles.push_back(r);
-  }
-  metrics["tiles"] = full_tiles;
   WriteFileAtomic((fs::path(job_dir) / "tileset.json").string(),
                   proto::TilesetToJson(outputs.assembly.tileset).dump(2));
   WriteFileAtomic((fs::path(job_dir) / "metrics.json").string(), metrics.dump(2));
+  proto::WriteJobPictures(metrics, job_dir);
   return metrics;
 }
 

@@ -29,7 +29,8 @@ std::string ServerUsage() {
          "         [--data-root DIR ...] [--allow-vsi /vsicurl/ ...] [--workers 2]\n"
          "         [--token T | env SATMESH_TOKEN] [--max-body-bytes 1048576]\n"
          "         [--max-images 64] [--max-tiles 1024] [--max-pixels 4000000000]\n"
-         "         [--http-threads 32] [--proto-dir DIR]\n";
+         "         [--http-threads 32] [--proto-dir DIR] [--viewer-dir DIR | env SATMESH_VIEWER_DIR]\n"
+         "         [--cors-origin https://example.org ... | --cors-origin '*']\n";
 }
 
 ServerOptions ParseServerArgs(const std::vector<std::string>& args,
@@ -37,6 +38,7 @@ ServerOptions ParseServerArgs(const std::vector<std::string>& args,
                               std::map<std::string, std::string>* extra) {
   ServerOptions o;
   if (const char* token = std::getenv("SATMESH_TOKEN")) o.token = token;
+  if (const char* viewer = std::getenv("SATMESH_VIEWER_DIR")) o.viewer_dir = viewer;  // the image sets it
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& arg = args[i];
     SATMESH_CHECK(arg.rfind("--", 0) == 0 && arg.size() > 2, ErrorCode::kInvalidArgument,
@@ -57,6 +59,8 @@ ServerOptions ParseServerArgs(const std::vector<std::string>& args,
     else if (key == "max-pixels") o.inputs.max_pixels = ToInteger(key, value);
     else if (key == "http-threads") o.http_threads = int(ToInteger(key, value));
     else if (key == "proto-dir") o.proto_dir = value;
+    else if (key == "viewer-dir") o.viewer_dir = value;
+    else if (key == "cors-origin") o.cors_origins.push_back(value);
     else {
       bool known = false;
       for (const auto& k : extra_keys) known = known || k == key;

@@ -11,7 +11,7 @@ namespace satmesh::server {
 
 // Parses --host --port --data-dir --data-root (repeatable) --allow-vsi (repeatable)
 // --workers --token --max-body-bytes --max-images --max-tiles --max-pixels --proto-dir
-// --http-threads; SATMESH_TOKEN in the environment sets the token. Options named in
+// --http-threads --viewer-dir --cors-origin (repeatable); SATMESH_TOKEN in the environment sets the token, SATMESH_VIEWER_DIR the viewer folder. Options named in
 // extra_keys go to *extra. Throws Error{kInvalidArgument} naming a bad option.
 ServerOptions ParseServerArgs(const std::vector<std::string>& args,
                               const std::vector<std::string>& extra_keys = {},

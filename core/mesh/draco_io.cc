@@ -5,6 +5,7 @@
 #include <draco/core/encoder_buffer.h>
 #include <draco/io/gltf_encoder.h>
 #include <draco/mesh/mesh.h>
+#include <draco/metadata/geometry_metadata.h>
 
 #include <cstdint>
 #include <cstring>
@@ -13,6 +14,7 @@
 
 #include "core/common/error.h"
 #include "core/mesh/mesh_io_internal.h"
+#include "core/mesh/topology.h"
 
 namespace satmesh::mesh_io_internal {
 namespace {
@@ -36,6 +38,20 @@ std::unique_ptr<draco::Mesh> ToDracoMesh(const TriangleMesh& mesh) {
     out->SetFace(draco::FaceIndex(uint32_t(f)), face);
   }
   return out;
+}
+
+// Adds a float attribute of `components` values per point (point i = vertex i) from
+// `values` (num_points x components floats); returns its id.
+int AddVertexAttribute(draco::GeometryAttribute::Type type, int components, const float* values,
+                       draco::Mesh* mesh) {
+  draco::GeometryAttribute attribute;
+  attribute.Init(type, nullptr, uint8_t(components), draco::DT_FLOAT32, /*normalized=*/false,
+                 int64_t(sizeof(float)) * components, 0);
+  const int att_id = mesh->AddAttribute(attribute, /*identity_mapping=*/true, mesh->num_points());
+  draco::PointAttribute* att = mesh->attribute(att_id);
+  for (uint32_t i = 0; i < mesh->num_points(); ++i)
+    att->SetAttributeValue(draco::AttributeValueIndex(i), values + size_t(i) * components);
+  return att_id;
 }
 
 // Points become vertices (positions as float), faces keep their corner order.
@@ -119,10 +135,26 @@ TriangleMesh ReadDraco(const std::string& path) {
   return DecodeDracoBytes(path, bytes.data(), bytes.size());
 }
 
-void WriteGlb(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options) {
+void WriteGlb(const std::string& path, const TriangleMesh& mesh, const std::vector<VertexScalar>& scalars,
+              const MeshWriteOptions& options) {
   const std::unique_ptr<draco::Mesh> dmesh = ToDracoMesh(mesh);
+  // Area-weighted unit normals; glTF requires unit length, so a vertex on no face (or
+  // only degenerate ones) gets +z.
+  std::vector<Eigen::Vector3f> normals = VertexNormals(mesh);
+  for (auto& n : normals)
+    if (n.squaredNorm() < 0.5f) n = Eigen::Vector3f::UnitZ();
+  AddVertexAttribute(draco::GeometryAttribute::NORMAL, 3, reinterpret_cast<const float*>(normals.data()), dmesh.get());
+  for (const auto& s : scalars) {
+    const int att_id = AddVertexAttribute(draco::GeometryAttribute::GENERIC, 1, s.values.data(), dmesh.get());
+    // The glTF attribute name travels as the attribute's metadata (draco::GltfEncoder).
+    auto metadata = std::make_unique<draco::AttributeMetadata>();
+    metadata->AddEntryString(draco::GltfEncoder::kDracoMetadataGltfAttributeName, s.name);
+    dmesh->AddAttributeMetadata(att_id, std::move(metadata));
+  }
   draco::DracoCompressionOptions compression;
   compression.quantization_position.SetQuantizationBits(options.draco_position_bits);
+  compression.quantization_bits_normal = options.draco_normal_bits;
+  compression.quantization_bits_generic = options.draco_scalar_bits;
   compression.compression_level = 10 - options.draco_speed;  // speed 0 = most compression
   dmesh->SetCompressionEnabled(true);
   dmesh->SetCompressionOptions(compression);

@@ -86,7 +86,33 @@ std::string MeshWriteOptions::Check() const {
     return "draco_position_bits must be in [8, 30], got " + std::to_string(draco_position_bits);
   if (draco_speed < 0 || draco_speed > 10)
     return "draco_speed must be in [0, 10], got " + std::to_string(draco_speed);
+  if (draco_normal_bits < 6 || draco_normal_bits > 16)
+    return "draco_normal_bits must be in [6, 16], got " + std::to_string(draco_normal_bits);
+  if (draco_scalar_bits < 8 || draco_scalar_bits > 24)
+    return "draco_scalar_bits must be in [8, 24], got " + std::to_string(draco_scalar_bits);
   return "";
+}
+
+void WriteGlb(const std::string& path, const TriangleMesh& mesh, const std::vector<VertexScalar>& scalars,
+              const MeshWriteOptions& options) {
+  const std::string problem = options.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument,
+                "MeshWriteOptions for " + path + ": " + problem);
+  ValidateMesh(mesh, path);
+  for (const auto& s : scalars) {
+    const bool named = s.name.size() > 1 && s.name[0] == '_' &&
+                       s.name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") == std::string::npos;
+    SATMESH_CHECK(named, ErrorCode::kInvalidArgument,
+                  path + ": vertex scalar name '" + s.name + "' is not of the form _[A-Z0-9_]+");
+    SATMESH_CHECK(s.values.size() == mesh.vertices.size(), ErrorCode::kInvalidArgument,
+                  path + ": vertex scalar " + s.name + " has " + std::to_string(s.values.size()) +
+                      " values for " + std::to_string(mesh.vertices.size()) + " vertices");
+    for (size_t i = 0; i < s.values.size(); ++i)
+      SATMESH_CHECK(std::isfinite(s.values[i]), ErrorCode::kInvalidArgument,
+                    path + ": vertex scalar " + s.name + " is not finite at vertex " + std::to_string(i));
+  }
+  SATMESH_CHECK(Extension(path) == ".glb", ErrorCode::kInvalidArgument, "WriteGlb: not a .glb path: " + path);
+  mesh_io_internal::WriteGlb(path, mesh, scalars, options);
 }
 
 void WriteMesh(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options) {
@@ -98,7 +124,7 @@ void WriteMesh(const std::string& path, const TriangleMesh& mesh, const MeshWrit
   if (ext == ".ply") return mesh_io_internal::WritePly(path, mesh, options);
   if (ext == ".obj") return mesh_io_internal::WriteObj(path, mesh);
   if (ext == ".drc") return mesh_io_internal::WriteDraco(path, mesh, options);
-  if (ext == ".glb") return mesh_io_internal::WriteGlb(path, mesh, options);
+  if (ext == ".glb") return mesh_io_internal::WriteGlb(path, mesh, {}, options);
   ThrowError(ErrorCode::kInvalidArgument,
              "unknown mesh extension '" + ext + "' (use .ply, .obj, .drc, .glb): " + path);
 }

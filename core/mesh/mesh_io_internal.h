@@ -13,7 +13,8 @@ void WriteObj(const std::string& path, const TriangleMesh& mesh);
 TriangleMesh ReadObj(const std::string& path);
 void WriteDraco(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options);
 TriangleMesh ReadDraco(const std::string& path);
-void WriteGlb(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options);
+void WriteGlb(const std::string& path, const TriangleMesh& mesh, const std::vector<VertexScalar>& scalars,
+              const MeshWriteOptions& options);
 TriangleMesh ReadGlb(const std::string& path);
 
 // Whole file as bytes; throws kNotFound / kIo naming the file.

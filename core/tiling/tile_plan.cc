@@ -29,6 +29,17 @@ GdalDatasetPtr OpenDsm(const std::string& path) {
   return ds;
 }
 
+// A CRS of the job must be one GDAL/PROJ knows and reachable from the DSM's: checked when
+// the job is planned (the server plans at submission), naming the job's field.
+void CheckCrs(const std::string& field, const std::string& crs, const std::string& dsm_crs_wkt) {
+  if (crs.empty()) return;
+  try {
+    CrsTransform(crs, dsm_crs_wkt);
+  } catch (const Error& e) {
+    ThrowError(ErrorCode::kInvalidArgument, field + ": '" + crs + "' is not a usable CRS (" + e.what() + ")");
+  }
+}
+
 // The AOI polygon in the DSM's CRS, each edge densified so curved images stay close.
 std::vector<Eigen::Vector2d> AoiInDsmCrs(const JobAoi& aoi, const DsmGrid& grid) {
   if (aoi.crs.empty()) return aoi.polygon;
@@ -146,6 +157,8 @@ JobPlan PlanJob(const JobSpec& spec) {
   SATMESH_CHECK(!plan.dsm.crs_wkt.empty() && !CrsIsGeographic(plan.dsm.crs_wkt),
                 ErrorCode::kInvalidInput,
                 "initial DSM '" + spec.initial_dsm + "': tiling needs a projected CRS (metres)");
+  CheckCrs("outputs.crs", spec.output_crs, plan.dsm.crs_wkt);
+  CheckCrs("aoi.crs", spec.aoi.crs, plan.dsm.crs_wkt);
   plan.output_crs = spec.output_crs.empty() ? plan.dsm.crs_wkt : spec.output_crs;
   const auto& gt = plan.dsm.geo_transform;
   const double cell = gt[1];

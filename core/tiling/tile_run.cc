@@ -70,10 +70,46 @@ double PeakRssMb() {
   return usage.ru_maxrss / 1024.0;  // Linux: kilobytes
 }
 
-// Writes the trimmed piece: PLY in the output CRS, GLB in the tile's ENU frame; fills the
-// result's region and transform.
+// Bilinear height of `dsm` at (x, y) in its CRS from the valid ones of the 4 nearest cell
+// centres (weights renormalised); NaN when none is valid.
+float SampleDsm(const Dsm& dsm, double x, double y) {
+  const double u = (x - dsm.geo_transform[0]) / dsm.geo_transform[1] - 0.5;
+  const double v = (y - dsm.geo_transform[3]) / dsm.geo_transform[5] - 0.5;
+  const int i0 = int(std::floor(u)), j0 = int(std::floor(v));
+  const double fu = u - i0, fv = v - j0;
+  double sum = 0, weight = 0;
+  for (int dj = 0; dj < 2; ++dj)
+    for (int di = 0; di < 2; ++di) {
+      const int i = i0 + di, j = j0 + dj;
+      if (i < 0 || j < 0 || i >= dsm.width || j >= dsm.height || !std::isfinite(dsm.at(i, j))) continue;
+      const double w = (di ? fu : 1 - fu) * (dj ? fv : 1 - fv) + 1e-9;
+      sum += w * dsm.at(i, j);
+      weight += w;
+    }
+  return weight > 0 ? float(sum / weight) : NAN;
+}
+
+// The .glb's per-vertex scalars for viewers: _HEIGHT, the ellipsoidal height (m), and
+// _CHANGE, refined minus initial DSM height at the vertex (m; 0 where the initial DSM
+// had no data).
+std::vector<VertexScalar> ViewerScalars(const PointMesh& piece_dsm, const std::vector<Eigen::Vector3d>& geo,
+                                        const Dsm& initial) {
+  VertexScalar height{"_HEIGHT", {}}, change{"_CHANGE", {}};
+  height.values.reserve(geo.size());
+  change.values.reserve(geo.size());
+  for (size_t i = 0; i < geo.size(); ++i) {
+    height.values.push_back(float(geo[i].z()));
+    const Eigen::Vector3d& p = piece_dsm.points[i];
+    const float before = SampleDsm(initial, p.x(), p.y());
+    change.values.push_back(std::isfinite(before) ? float(p.z() - before) : 0.f);
+  }
+  return {height, change};
+}
+
+// Writes the trimmed piece: PLY in the output CRS, GLB in the tile's ENU frame (with
+// ViewerScalars against `initial`); fills the result's region and transform.
 void WritePiece(const PointMesh& piece_dsm, const PlannedTile& tile, const JobPlan& plan,
-                const fs::path& out_dir, TileResult* r) {
+                const Dsm& initial, const fs::path& out_dir, TileResult* r) {
   const std::string& dsm_crs = plan.dsm.crs_wkt;
   PointMesh piece_out{Transformed(piece_dsm.points, dsm_crs, plan.output_crs), piece_dsm.faces,
                       piece_dsm.height_sigma};
@@ -110,7 +146,8 @@ void WritePiece(const PointMesh& piece_dsm, const PlannedTile& tile, const JobPl
     const Eigen::Vector3d enu = ecef_from_enu.transpose() * (p - center_ecef);
     glb.vertices.emplace_back(float(enu.x()), float(enu.z()), float(-enu.y()));
   }
-  WriteAtomically(out_dir / TileGlbPath(tile), [&](const std::string& p) { WriteMesh(p, glb); });
+  const std::vector<VertexScalar> scalars = ViewerScalars(piece_dsm, geo, initial);
+  WriteAtomically(out_dir / TileGlbPath(tile), [&](const std::string& p) { WriteGlb(p, glb, scalars); });
   r->core_vertices = piece_dsm.points.size();
   r->core_faces = piece_dsm.faces.size();
 }
@@ -186,7 +223,7 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
     const PointMesh piece = ClipToBox(padded, tile.core);
     SATMESH_CHECK(!piece.faces.empty(), ErrorCode::kInvalidInput,
                   "tile " + tile.Name() + ": no refined surface inside the tile's core");
-    WritePiece(piece, tile, plan, out_dir, &r);
+    WritePiece(piece, tile, plan, ReadDsmWindow(spec.initial_dsm, tile.padded_cells), out_dir, &r);
     r.write_s = Seconds(t0);
     if (!keep_mesh) r.refine.mesh = TriangleMesh{};
     r.ok = true;

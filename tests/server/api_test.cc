@@ -22,6 +22,133 @@ TEST(Api, LandingConformanceAndProcessDescription) {
   EXPECT_TRUE(d["inputs"]["job"]["schema"]["properties"].contains("images"));
   EXPECT_EQ(Json(c.Get("/api"))["openapi"], "3.0.3");
   EXPECT_EQ(Json(c.Get("/health"))["status"], "ok");
+  // Links are absolute, from the request's Host (OWSLib follows them as they are).
+  const std::string base = "http://127.0.0.1:" + std::to_string(s.port);
+  for (const auto& link : Json(c.Get("/"))["links"]) EXPECT_EQ(link["href"].get<std::string>().rfind(base + "/", 0), 0u) << link;
+  EXPECT_EQ(Json(c.Get("/processes/refine-mesh"))["links"][0]["href"], base + "/processes/refine-mesh");
+}
+
+TEST(Api, CorsPreflightAndHeadersForAllowedOriginsOnly) {
+  TestServer s("cors", {}, 2, "secret");
+  s.options.cors_origins = {"https://viewer.example"};
+  s.Start();
+  auto c = s.Client();
+  // A browser's preflight carries no credentials: answered before authentication.
+  const httplib::Headers preflight = {{"Origin", "https://viewer.example"},
+                                      {"Access-Control-Request-Method", "GET"},
+                                      {"Access-Control-Request-Headers", "authorization"}};
+  auto r = c.Options("/jobs/abc/tileset.json", preflight);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 204);
+  EXPECT_EQ(r->get_header_value("Access-Control-Allow-Origin"), "https://viewer.example");
+  EXPECT_NE(r->get_header_value("Access-Control-Allow-Headers").find("Authorization"), std::string::npos);
+  EXPECT_EQ(r->get_header_value("Access-Control-Allow-Methods"), "GET, HEAD, OPTIONS");
+  r = c.Options("/processes/refine-mesh/execution", preflight);
+  EXPECT_EQ(r->get_header_value("Access-Control-Allow-Methods"), "POST, OPTIONS");
+  // The real request: the origin is echoed (Vary: Origin), also on a 401.
+  r = c.Get("/jobs", {{"Origin", "https://viewer.example"}, {"Authorization", "Bearer secret"}});
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(r->get_header_value("Access-Control-Allow-Origin"), "https://viewer.example");
+  EXPECT_EQ(r->get_header_value("Vary"), "Origin");
+  r = c.Get("/jobs", {{"Origin", "https://viewer.example"}});
+  EXPECT_EQ(r->status, 401);
+  EXPECT_EQ(r->get_header_value("Access-Control-Allow-Origin"), "https://viewer.example");
+  // Another origin gets no CORS headers, its preflight no Allow-Methods.
+  r = c.Get("/jobs", {{"Origin", "https://other.example"}, {"Authorization", "Bearer secret"}});
+  EXPECT_EQ(r->status, 200);
+  EXPECT_FALSE(r->has_header("Access-Control-Allow-Origin"));
+  r = c.Options("/jobs", {{"Origin", "https://other.example"}, {"Access-Control-Request-Method", "GET"}});
+  EXPECT_FALSE(r->has_header("Access-Control-Allow-Origin"));
+  EXPECT_FALSE(r->has_header("Access-Control-Allow-Methods"));
+}
+
+TEST(Api, NoCorsHeadersByDefaultAndAnyOriginWithStar) {
+  TestServer plain("cors_none");
+  plain.Start();
+  auto r = plain.Client().Get("/processes", {{"Origin", "https://viewer.example"}});
+  EXPECT_EQ(r->status, 200);
+  EXPECT_FALSE(r->has_header("Access-Control-Allow-Origin"));
+  TestServer any("cors_any");
+  any.options.cors_origins = {"*"};
+  any.Start();
+  r = any.Client().Get("/processes", {{"Origin", "https://viewer.example"}});
+  EXPECT_EQ(r->get_header_value("Access-Control-Allow-Origin"), "*");
+}
+
+TEST(Api, BadCorsOriginRejectedByName) {
+  ServerOptions o;
+  o.cors_origins = {"viewer.example"};
+  EXPECT_NE(o.Check().find("cors_origins: 'viewer.example'"), std::string::npos) << o.Check();
+  o.cors_origins = {"https://viewer.example/app"};
+  EXPECT_NE(o.Check().find("cors_origins"), std::string::npos);
+  o.cors_origins = {"https://viewer.example:8443", "*"};
+  EXPECT_EQ(o.Check(), "");
+}
+
+TEST(Api, WrongMethodIs405WithAllow) {
+  TestServer s("methods");
+  s.Start();
+  auto c = s.Client();
+  auto r = c.Put("/jobs", "{}", "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 405);
+  EXPECT_EQ(r->get_header_value("Allow"), "GET, HEAD, OPTIONS");
+  EXPECT_EQ(r->get_header_value("Content-Type"), "application/problem+json");
+  EXPECT_NE(Json(r)["type"].get<std::string>().find("method-not-allowed"), std::string::npos);
+  r = c.Post("/jobs/abc", "{}", "application/json");
+  EXPECT_EQ(r->status, 405);
+  EXPECT_EQ(r->get_header_value("Allow"), "GET, HEAD, DELETE, OPTIONS");
+  r = c.Get("/processes/refine-mesh/execution");
+  EXPECT_EQ(r->status, 405);
+  EXPECT_EQ(r->get_header_value("Allow"), "POST, OPTIONS");
+  r = c.Delete("/processes");
+  EXPECT_EQ(r->status, 405);
+  r = c.Options("/jobs/abc");
+  EXPECT_EQ(r->status, 204);
+  EXPECT_EQ(r->get_header_value("Allow"), "GET, HEAD, DELETE, OPTIONS");
+  EXPECT_EQ(c.Put("/no/such/route", "{}", "application/json")->status, 404);
+}
+
+TEST(Api, ExecuteTakesTheDescribedJobInputAndTheOlderForms) {
+  TestServer s("inputs_job");
+  s.Start();
+  auto c = s.Client();
+  const json job = MakeStubJob(s.root);
+  for (const json& body : {json{{"inputs", {{"job", job}}}}, json{{"inputs", job}}, job}) {
+    auto r = c.Post("/processes/refine-mesh/execution", body.dump(), "application/json");
+    ASSERT_EQ(r->status, 201) << body.dump() << " -> " << r->body;
+    EXPECT_EQ(WaitFor(s, Json(r)["jobID"], "successful")["status"], "successful");
+  }
+  auto r = c.Post("/processes/refine-mesh/execution", json{{"inputs", {{"job", "images.json"}}}}.dump(),
+                  "application/json");
+  EXPECT_EQ(r->status, 400);
+  EXPECT_NE(Json(r)["detail"].get<std::string>().find("inputs.job"), std::string::npos) << r->body;
+  // The description declares exactly that input.
+  const json d = Json(c.Get("/processes/refine-mesh"));
+  EXPECT_EQ(d["inputs"].size(), 1u);
+  EXPECT_TRUE(d["inputs"].contains("job"));
+}
+
+TEST(Api, ViewerPageAndCesiumServedWithoutTokenJobDataWithIt) {
+  TestServer s("viewer", {}, 2, "secret");
+  s.Start();
+  auto c = s.Client();
+  const httplib::Headers auth = {{"Authorization", "Bearer secret"}};
+  auto r = c.Post("/processes/refine-mesh/execution", auth, MakeStubJob(s.root).dump(), "application/json");
+  ASSERT_EQ(r->status, 201) << r->body;
+  const std::string id = Json(r)["jobID"];
+  r = c.Get(("/jobs/" + id + "/viewer").c_str());
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "text/html; charset=utf-8");
+  EXPECT_NE(r->body.find("Cesium.js"), std::string::npos);
+  r = c.Get("/viewer/Cesium/Cesium.js");
+  EXPECT_EQ(r->status, 200);
+  EXPECT_GT(r->body.size(), 1000000u);  // the minified CesiumJS, ~4 MB
+  EXPECT_EQ(c.Get(("/jobs/" + id + "/tileset.json").c_str())->status, 401);
+  r = c.Get(("/jobs/" + id + "/tileset.json").c_str(), auth);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(Json(r)["extras"]["tiles_total"], 4);
+  EXPECT_EQ(c.Get("/jobs/nosuchjob/viewer")->status, 404);
 }
 
 TEST(Api, SubmitPollDownloadTilesAndResults) {

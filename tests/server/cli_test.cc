@@ -73,5 +73,38 @@ TEST(Cli, SubmitWaitStatusJobsResultsCancel) {
   EXPECT_EQ(Stop(server), 0);
 }
 
+TEST(Cli, SubmitResolvesRelativeHrefsAgainstTheJobFileOrSaysWhatToDo) {
+  const std::string dir = TempDir("cli_hrefs");
+  const nlohmann::json job = MakeStubJob(dir + "/root");  // relative hrefs: a.tif, b.tif, dsm.tif
+  // A scene one folder below the data root, with files only there.
+  std::filesystem::create_directories(dir + "/root/scene");
+  for (const char* name : {"c.tif", "d.tif", "scene_dsm.tif"}) std::ofstream(dir + "/root/scene/" + name) << "stub";
+  nlohmann::json scene_job = job;
+  scene_job["images"] = {{{"href", "c.tif"}}, {{"href", "d.tif"}}};
+  scene_job["initial"]["dsm"] = "scene_dsm.tif";
+  std::ofstream(dir + "/root/scene/job.json") << scene_job.dump();
+  Child server = Spawn(dir, 2, 1, 10);
+  ASSERT_GT(server.port, 0);
+  const std::string url = " --server http://127.0.0.1:" + std::to_string(server.port);
+  // Its hrefs resolve against the job file's folder (not the server's root, where
+  // c.tif is not).
+  const CliRun ok = Cli("submit " + dir + "/root/scene/job.json --wait --quiet --poll 0.05" + url);
+  EXPECT_EQ(ok.code, 0) << ok.out;
+  // Outside every data root: refused, and the message says what to do.
+  std::filesystem::create_directories(dir + "/elsewhere");
+  for (const char* name : {"a.tif", "b.tif", "dsm.tif"})
+    std::filesystem::copy_file(dir + "/root/" + name, dir + "/elsewhere/" + name);
+  std::ofstream(dir + "/elsewhere/job.json") << job.dump();
+  const CliRun refused = Cli("submit " + dir + "/elsewhere/job.json" + url + " 2>&1");
+  EXPECT_NE(refused.code, 0);
+  EXPECT_NE(refused.out.find("images[0].href"), std::string::npos) << refused.out;
+  EXPECT_NE(refused.out.find("--data-root " + dir + "/elsewhere"), std::string::npos) << refused.out;
+  EXPECT_NE(refused.out.find("--as-written"), std::string::npos) << refused.out;
+  // --as-written: the server resolves them against its root (where a.tif etc. are).
+  const CliRun as_written = Cli("submit " + dir + "/elsewhere/job.json --as-written --wait --quiet --poll 0.05" + url);
+  EXPECT_EQ(as_written.code, 0) << as_written.out;
+  EXPECT_EQ(Stop(server), 0);
+}
+
 }  // namespace
 }  // namespace satmesh::server::testing

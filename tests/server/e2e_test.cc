@@ -61,8 +61,34 @@ TEST(EndToEnd, SmallSyntheticSceneOverHttpMatchesInProcess) {
     EXPECT_GT(ReadMesh(dir + "/tile.glb").num_faces(), 100u);
   }
   EXPECT_EQ(c.Get(results["mesh"]["href"].get<std::string>().c_str())->status, 200);
+  // The pictures: a hillshade preview and the convergence plot, as PNG.
+  for (const char* picture : {"preview", "convergence"}) {
+    ASSERT_TRUE(results.contains(picture)) << results.dump();
+    auto png = c.Get(results[picture]["href"].get<std::string>().c_str());
+    ASSERT_EQ(png->status, 200) << picture;
+    EXPECT_EQ(png->get_header_value("Content-Type"), "image/png");
+    EXPECT_EQ(png->body.substr(1, 3), "PNG");
+  }
   const json tileset = Json(c.Get(results["tileset"]["href"].get<std::string>().c_str()));
   EXPECT_EQ(tileset["asset"]["version"], "1.1");
+  // The viewer's live tileset: every finished tile, as the assembled one.
+  const json live = Json(c.Get(("/jobs/" + id + "/tileset.json").c_str()));
+  EXPECT_EQ(live["extras"]["status"], "successful");
+  EXPECT_EQ(live["root"]["children"].size(), tileset["root"]["children"].size());
+  EXPECT_EQ(live["extras"]["tiles_done"], results["tiles"].size());
+  for (size_t k = 0; k < 6; ++k)
+    EXPECT_DOUBLE_EQ(live["root"]["boundingVolume"]["region"][k].get<double>(),
+                     tileset["root"]["boundingVolume"]["region"][k].get<double>());
+  // Every CRS is checked at submission, naming its field.
+  for (const char* field : {"outputs", "aoi"}) {
+    json bad = job;
+    if (std::string(field) == "outputs") bad["outputs"]["crs"] = "EPSG:99999999";
+    else bad["aoi"] = {{"bbox", {0, 0, 1, 1}}, {"crs", "EPSG:99999999"}};
+    auto refused = c.Post("/processes/refine-mesh/execution", bad.dump(), "application/json");
+    EXPECT_EQ(refused->status, 400) << refused->body;
+    EXPECT_NE(Json(refused)["detail"].get<std::string>().find(std::string(field) + ".crs: 'EPSG:99999999'"),
+              std::string::npos) << refused->body;
+  }
   const json served = results["metrics"]["value"];
 
   // The same job in-process (the CLI's path).
@@ -87,6 +113,73 @@ TEST(EndToEnd, SmallSyntheticSceneOverHttpMatchesInProcess) {
   const auto s = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
   std::printf("[ e2e ] synth %.1f s, submit->successful over HTTP %.1f s, in-process run %.1f s, "
               "%zu tile(s)\n", s(t0, t1), s(t1, t2), s(t2, t3), expected["tiles"].size());
+  server.Stop();
+}
+
+TEST(EndToEnd, MultiTileMetricsAreFilledAsInProcess) {
+  const std::string dir = TempDir("e2e_tiles");
+  const std::string scene = dir + "/scene";
+  synth::SynthOptions synth_options = synth::SynthPreset("small", /*seed=*/2);
+  synth_options.write_preview = false;
+  synth::GenerateScene(scene, synth_options);
+  json job = ReadJsonFile(scene + "/job.json");
+  job["options"]["iterations_per_level"] = 3;
+  job["tiling"] = {{"size_m", 40}, {"overlap_m", 8}};  // 72 m scene: 2 x 2 tiles
+
+  RealExecutor executor;
+  ServerOptions options;
+  options.port = 0;
+  options.data_dir = dir + "/data";
+  options.inputs.data_roots = {scene};
+  options.scheduler.workers = 2;
+  ApiServer server(options, &executor);
+  httplib::Client c("127.0.0.1", server.Start());
+  c.set_read_timeout(30, 0);
+  auto r = c.Post("/processes/refine-mesh/execution", json{{"inputs", {{"job", job}}}}.dump(), "application/json");
+  ASSERT_EQ(r->status, 201) << r->body;
+  const std::string id = Json(r)["jobID"];
+  json info;
+  for (int i = 0; i < 3000; ++i) {
+    info = Json(c.Get(("/jobs/" + id).c_str()));
+    if (info["status"] != "accepted" && info["status"] != "running") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_EQ(info["status"], "successful") << info.dump();
+  const json served = Json(c.Get(("/jobs/" + id + "/results").c_str()))["metrics"]["value"];
+  ASSERT_EQ(served["tiles"].size(), 4u);
+
+  // The job-level summary over the tiles: filled, and consistent with the tiles.
+  EXPECT_NEAR(served["gsd_m"].get<double>(), 0.30, 0.01);
+  EXPECT_EQ(served["views"].size(), 3u);
+  ASSERT_FALSE(served["pairs"].empty());
+  for (const auto& p : served["pairs"]) EXPECT_GE(p["tiles"].get<int>(), 1);
+  ASSERT_FALSE(served["levels"].empty());
+  const json& finest = served["levels"].back();
+  EXPECT_EQ(finest["level"], 0);
+  int faces = 0;
+  double zncc_min = 1, zncc_max = -1;
+  for (const auto& t : served["tiles"]) {
+    faces += t["levels"].back()["faces"].get<int>();
+    zncc_min = std::min(zncc_min, t["levels"].back()["mean_zncc_end"].get<double>());
+    zncc_max = std::max(zncc_max, t["levels"].back()["mean_zncc_end"].get<double>());
+  }
+  EXPECT_EQ(finest["faces"], faces);
+  EXPECT_GE(finest["mean_zncc_end"].get<double>(), zncc_min - 1e-9);  // a weighted mean of the tiles'
+  EXPECT_LE(finest["mean_zncc_end"].get<double>(), zncc_max + 1e-9);
+  EXPECT_GT(served["time_s"]["total"].get<double>(), 0.1);
+  EXPECT_GT(served["totals"]["peak_rss_mb"].get<double>(), 10.0);
+
+  // In-process (the CLI's path): the same summary.
+  const JobOutputs local = RunJob(proto::JobSpecFromJson(job, scene), dir + "/local");
+  const json expected = proto::JobMetricsToJson(local);
+  EXPECT_EQ(served["views"], expected["views"]);
+  EXPECT_NEAR(served["gsd_m"].get<double>(), expected["gsd_m"].get<double>(), 1e-9);
+  EXPECT_EQ(served["pairs"].size(), expected["pairs"].size());
+  ASSERT_EQ(served["levels"].size(), expected["levels"].size());
+  EXPECT_EQ(served["levels"].back()["faces"], expected["levels"].back()["faces"]);
+  EXPECT_NEAR(served["levels"].back()["mean_zncc_end"].get<double>(),
+              expected["levels"].back()["mean_zncc_end"].get<double>(), 1e-4);
+  EXPECT_GT(expected["totals"]["peak_rss_mb"].get<double>(), 10.0);
   server.Stop();
 }
 

@@ -339,6 +339,46 @@ TEST(ReadMesh, CorruptDracoAndGlbRejected) {
   EXPECT_TRUE(Contains(ReadError(glb), "glTF magic"));
 }
 
+TEST(WriteGlb, CarriesNormalsAndNamedScalarsDracoCompressed) {
+  const TriangleMesh mesh = UtmMesh(6);
+  std::vector<float> height(mesh.num_vertices());
+  for (size_t i = 0; i < height.size(); ++i) height[i] = mesh.vertices[i].z();
+  const std::string path = TempPath("scalars.glb");
+  WriteGlb(path, mesh, {{"_HEIGHT", height}});
+  const std::string bytes = Slurp(path);
+  uint32_t json_length = 0;
+  std::memcpy(&json_length, bytes.data() + 12, 4);
+  const std::string json = bytes.substr(20, json_length);
+  // Both in the primitive's attributes and in its Draco extension's attribute map.
+  for (const std::string name : {"\"NORMAL\"", "\"_HEIGHT\"", "\"POSITION\""}) {
+    const size_t first = json.find(name);
+    ASSERT_NE(first, std::string::npos) << name << " in " << json;
+    EXPECT_NE(json.find(name, first + 1), std::string::npos) << name << " twice in " << json;
+  }
+  EXPECT_TRUE(Contains(json, "KHR_draco_mesh_compression"));
+  // The reader still reads the positions.
+  EXPECT_EQ(ReadMesh(path).num_vertices(), mesh.num_vertices());
+}
+
+TEST(WriteGlb, BadScalarsRejectedWithTheirName) {
+  const TriangleMesh mesh = UtmMesh(4);
+  const std::string path = TempPath("bad_scalars.glb");
+  const auto error = [&](const VertexScalar& s) {
+    try {
+      WriteGlb(path, mesh, {s});
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_TRUE(Contains(error({"height", std::vector<float>(mesh.num_vertices())}), "'height'"));
+  EXPECT_TRUE(Contains(error({"_HEIGHT", std::vector<float>(3)}), "has 3 values for"));
+  std::vector<float> nan(mesh.num_vertices(), 0.f);
+  nan[2] = NAN;
+  EXPECT_TRUE(Contains(error({"_HEIGHT", nan}), "not finite at vertex 2"));
+}
+
 // The refinement's per-vertex height sigma survives PLY in every encoding, +inf (no image
 // saw the vertex) included; a mesh without it is written without the property.
 TEST(ReadMesh, PlyKeepsHeightSigma) {
