@@ -122,10 +122,12 @@ void ParseAoi(const json& a, JobAoi* aoi) {
 
 void ParseTiling(const json& t, TilingOptions* tiling) {
   Object(t, "tiling");
-  CheckKeys(t, "tiling", {"size_m", "overlap_m", "workers"});
+  CheckKeys(t, "tiling", {"size_m", "overlap_m", "workers", "memory_budget_mb"});
   if (t.contains("size_m")) tiling->tile_size_m = Number(t["size_m"], "tiling.size_m");
   if (t.contains("overlap_m")) tiling->overlap_m = Number(t["overlap_m"], "tiling.overlap_m");
   if (t.contains("workers")) tiling->workers = Integer(t["workers"], "tiling.workers");
+  if (t.contains("memory_budget_mb"))
+    tiling->memory_budget_mb = Number(t["memory_budget_mb"], "tiling.memory_budget_mb");
   const std::string problem = tiling->Check();
   if (!problem.empty()) Bad("tiling", problem);
 }

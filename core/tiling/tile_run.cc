@@ -12,6 +12,7 @@
 #include "core/dsm/dsm.h"
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
+#include "core/tiling/memory_budget.h"
 #include "core/tiling/tile_input.h"
 
 namespace satmesh {
@@ -128,6 +129,10 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
                   "tile index " + std::to_string(tile_index) + " out of range");
     const PlannedTile& tile = plan.tiles[tile_index];
     r.name = tile.Name();
+    r.estimated_peak_mb = tile.memory.peak_mb;
+    SATMESH_CHECK(tile.memory.peak_mb <= plan.memory_budget_mb || plan.memory_budget_mb <= 0,
+                  ErrorCode::kInvalidArgument,
+                  OverBudgetMessage("tile " + tile.Name(), tile.memory, plan.memory_budget_mb));
     auto t0 = Clock::now();
     TileInput input = PrepareTileInput(spec, plan, tile_index);
     r.view_names = input.view_names;
@@ -176,8 +181,10 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
     r.error_code = ErrorCode::kInternal;
     r.error = e.what();
   }
-  if (!r.ok) spdlog::warn("tile {} failed: {}", r.name, r.error);
   r.peak_rss_mb = PeakRssMb();
+  if (!r.ok) spdlog::warn("tile {} failed: {}", r.name, r.error);
+  else spdlog::info("tile {}: estimated peak {:.0f} MB, process peak so far {:.0f} MB", r.name,
+                    r.estimated_peak_mb, r.peak_rss_mb);
   return r;
 }
 
