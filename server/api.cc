@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "core/common/error.h"
+#include "core/tiling/memory_budget.h"
 #include "proto/job_spec_json.h"
 #include "server/api_documents.h"
 #include "server/problem.h"
@@ -64,6 +65,7 @@ std::string ServerOptions::Check() const {
   if (max_body_bytes < 1024) return "max_body_bytes: must be >= 1024";
   if (http_threads < 1 || http_threads > 1024) return "http_threads: not in [1, 1024]";
   if (max_stream_s < 1) return "max_stream_s: must be >= 1";
+  if (!(memory_budget_mb >= 0)) return "memory_budget_mb: must be >= 0";
   std::string p = inputs.Check();
   if (!p.empty()) return p;
   return scheduler.Check();
@@ -99,6 +101,12 @@ struct ApiServer::Impl {
     }
     json job = body.is_object() && body.contains("inputs") ? body["inputs"] : body;
     ResolveHrefs(&job, options.inputs);
+    // The server's budget per worker, unless the job names its own (kept in the record).
+    if (job.is_object() && (!job.contains("tiling") || job["tiling"].is_object()) &&
+        !job["tiling"].contains("memory_budget_mb"))
+      job["tiling"]["memory_budget_mb"] = options.memory_budget_mb > 0
+                                              ? options.memory_budget_mb
+                                              : DefaultMemoryBudgetMb(options.scheduler.workers);
     const JobSpec spec = proto::JobSpecFromJson(job, "/");
     const std::string problem = spec.Check();
     if (!problem.empty()) ThrowError(ErrorCode::kInvalidArgument, problem);

@@ -29,7 +29,7 @@ std::string ServerUsage() {
          "         [--data-root DIR ...] [--allow-vsi /vsicurl/ ...] [--workers 2]\n"
          "         [--token T | env SATMESH_TOKEN] [--max-body-bytes 1048576]\n"
          "         [--max-images 64] [--max-tiles 1024] [--max-pixels 4000000000]\n"
-         "         [--http-threads 32] [--proto-dir DIR]\n";
+         "         [--http-threads 32] [--proto-dir DIR] [--memory-budget MB]\n";
 }
 
 ServerOptions ParseServerArgs(const std::vector<std::string>& args,
@@ -57,6 +57,7 @@ ServerOptions ParseServerArgs(const std::vector<std::string>& args,
     else if (key == "max-pixels") o.inputs.max_pixels = ToInteger(key, value);
     else if (key == "http-threads") o.http_threads = int(ToInteger(key, value));
     else if (key == "proto-dir") o.proto_dir = value;
+    else if (key == "memory-budget") o.memory_budget_mb = double(ToInteger(key, value));
     else {
       bool known = false;
       for (const auto& k : extra_keys) known = known || k == key;
