@@ -72,7 +72,7 @@ TileMemoryEstimate EstimateTileMemory(const JobSpec& spec, const DsmGrid& grid,
 std::string OverBudgetMessage(const std::string& what, const TileMemoryEstimate& e, double budget_mb) {
   char text[400];
   std::snprintf(text, sizeof(text),
-                "%s needs an estimated %.0f MB (%d views, %.0f Mpx of image windows, %.1f M DSM "
+                "%s needs an estimated %.0f MB (%d views, %.1f Mpx of image windows, %.2f M DSM "
                 "cells) but the memory budget is %.0f MB per worker (tiling.memory_budget_mb, "
                 "--memory-budget)",
                 what.c_str(), e.peak_mb, e.views, e.window_px / 1e6, e.dsm_cells / 1e6, budget_mb);
