@@ -146,6 +146,14 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
     for (auto& t : threads) t.join();
   }
   out.tiles_s = Seconds(t_tiles);
+  // The job's biases, in each tile's view order, as a tile that estimated them reports.
+  if (!out.job_bias_px.empty())
+    for (TileResult& t : out.tiles) {
+      t.view_bias_px.clear();
+      for (const std::string& name : t.view_names)
+        for (size_t i = 0; i < spec.images.size(); ++i)
+          if (spec.images[i].path == name) t.view_bias_px.push_back(out.job_bias_px[i]);
+    }
   if (cancelled || progress.Cancelled()) ThrowError(ErrorCode::kCancelled, "cancelled by the caller");
 
   const auto failed = [](const TileResult& t) { return !t.ok; };

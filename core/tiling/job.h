@@ -26,7 +26,8 @@ struct JobOutputs {
   double prepare_s = 0, write_s = 0;    // summed over tiles (+ assembly for write_s)
   // Tiled jobs with estimate_bias: the biases estimated once, over the tile nearest the
   // AOI's centre, and given to every tile (spec order; zero for an image that tile's
-  // area does not see); bias_s its time (reading that tile's windows included).
+  // area does not see; each tile's view_bias_px repeats them in its view order); bias_s
+  // its time (reading that tile's windows included).
   std::vector<Eigen::Vector2d> job_bias_px;
   std::string bias_tile;
   double bias_s = 0;

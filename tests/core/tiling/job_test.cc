@@ -186,7 +186,14 @@ TEST_F(TiledJob, BiasesAreEstimatedOnceForTheJob) {
   ASSERT_EQ(o.job_bias_px.size(), 3u);
   for (const auto& b : o.job_bias_px) EXPECT_LT(b.norm(), 0.2) << b.transpose();
   EXPECT_GT(o.bias_s, 0);
-  for (const auto& t : o.tiles) EXPECT_TRUE(t.view_bias_px.empty()) << t.name << ": not per tile";
+  for (const auto& t : o.tiles) {
+    EXPECT_EQ(t.bias_s, 0) << t.name << ": estimated once for the job, not per tile";
+    ASSERT_EQ(t.view_bias_px.size(), t.view_names.size()) << t.name;
+    for (size_t v = 0; v < t.view_names.size(); ++v)
+      for (size_t i = 0; i < spec.images.size(); ++i)
+        if (spec.images[i].path == t.view_names[v])
+          EXPECT_EQ(t.view_bias_px[v], o.job_bias_px[i]) << t.name << " view " << v;
+  }
 }
 
 TEST_F(TiledJob, ATinyBudgetIsRefusedNamingBudgetAndNeed) {
