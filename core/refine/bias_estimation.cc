@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <list>
 #include <map>
+#include <memory>
 
 #include <omp.h>
 
@@ -44,6 +46,47 @@ ViewLevel BuildLevel(const Problem& pb, int view, int level) {
   return out;
 }
 
+// The level data of solved views (their RPCs no longer change), kept for the views solved
+// after them, least recently used dropped first beyond max_bytes. Without the hit
+// records (a neighbour's warp reads its surface points and ray cosines only).
+class SolvedLevels {
+ public:
+  SolvedLevels(const Problem& pb, double max_bytes) : pb_(pb), max_bytes_(max_bytes) {}
+
+  std::shared_ptr<const ViewLevel> Get(int view, int level) {
+    const auto key = std::make_pair(view, level);
+    for (auto it = entries_.begin(); it != entries_.end(); ++it) {
+      if (it->key != key) continue;
+      entries_.splice(entries_.begin(), entries_, it);  // most recent first
+      return entries_.front().level;
+    }
+    ViewLevel built = BuildLevel(pb_, view, level);
+    built.hit_map.hits = {};
+    const size_t pixels = built.image.pixels.size();
+    const double bytes = double(pixels) * (sizeof(float) + sizeof(Eigen::Vector3f) +
+                                           sizeof(SurfacePoint) + sizeof(float));
+    auto shared = std::make_shared<const ViewLevel>(std::move(built));
+    entries_.push_front({key, shared, bytes});
+    bytes_ += bytes;
+    while (bytes_ > max_bytes_ && !entries_.empty()) {
+      bytes_ -= entries_.back().bytes;
+      entries_.pop_back();  // still alive while an objective holds it
+    }
+    return shared;
+  }
+
+ private:
+  struct Entry {
+    std::pair<int, int> key;
+    std::shared_ptr<const ViewLevel> level;
+    double bytes;
+  };
+  const Problem& pb_;
+  double max_bytes_;
+  double bytes_ = 0;
+  std::list<Entry> entries_;
+};
+
 // Mean ZNCC of the solved neighbours warped into `target` shifted by d (full-res px).
 // The target's hit map for a shift is its unshifted one moved by the rounded level shift
 // (a biased view's pixel q sees what the unbiased one sees at q - d). Shifts are
@@ -51,7 +94,8 @@ ViewLevel BuildLevel(const Problem& pb, int view, int level) {
 // target (what the warp into it reads: image, projection lattice, surface points).
 class ShiftObjective {
  public:
-  ShiftObjective(const Problem& pb, int target, const std::vector<int>& neighbours, int level)
+  ShiftObjective(const Problem& pb, int target, const std::vector<int>& neighbours, int level,
+                 SolvedLevels* solved)
       : pb_(pb), level_(level), base_rpc_(pb.rpcs[target]),
         photo_(PhotometricOptionsAt(pb.options.refine, pb.gsd_m * std::ldexp(1.0, level))) {
     ViewLevel base = BuildLevel(pb, target, level);
@@ -63,7 +107,7 @@ class ShiftObjective {
       s.target.image = base.image;
       s.target.hit_map.surface.resize(base_surface_.size());
     }
-    for (int n : neighbours) neighbours_.push_back(BuildLevel(pb, n, level));
+    for (int n : neighbours) neighbours_.push_back(solved->Get(n, level));
   }
 
   double operator()(const Eigen::Vector2d& d) { return Evaluate({d}).front(); }
@@ -108,9 +152,9 @@ class ShiftObjective {
                  &target.hit_map.surface);
     double sum = 0;
     long windows = 0;
-    for (const ViewLevel& n : neighbours_) {
+    for (const auto& n : neighbours_) {
       const PairEnergy e =
-          AccumulatePairGradient(n, target, pb_.normals, photo_, nullptr, &slot->workspace);
+          AccumulatePairGradient(*n, target, pb_.normals, photo_, nullptr, &slot->workspace);
       sum += e.sum_zncc;
       windows += e.num_windows;
     }
@@ -139,7 +183,7 @@ class ShiftObjective {
   RpcModel base_rpc_;
   std::vector<SurfacePoint> base_surface_;
   std::vector<Slot> slots_;
-  std::vector<ViewLevel> neighbours_;
+  std::vector<std::shared_ptr<const ViewLevel>> neighbours_;
   PhotometricOptions photo_;
   std::map<std::pair<long, long>, double> cache_;
 };
@@ -177,14 +221,15 @@ Eigen::Vector2d QuadraticStep(ShiftObjective& f, const Eigen::Vector2d& d, doubl
 }
 
 // Coarse grid search, then 3x3 quadratic steps level by level down to full resolution.
-Eigen::Vector2d SolveView(const Problem& pb, int view, const std::vector<int>& neighbours,
+Eigen::Vector2d SolveView(const Problem& pb, SolvedLevels* solved, int view,
+                          const std::vector<int>& neighbours,
                           int coarse_level, const Progress& progress, double* zncc_before,
                           double* zncc_after) {
   const BiasOptions& o = pb.options;
   Eigen::Vector2d d(0, 0);
   for (int level = coarse_level; level >= 0; --level) {
     progress.ThrowIfCancelled();
-    ShiftObjective f(pb, view, neighbours, level);
+    ShiftObjective f(pb, view, neighbours, level, solved);
     if (level == coarse_level) {
       const int n = int(std::floor(o.search_radius_px / o.coarse_step_px));
       std::vector<Eigen::Vector2d> grid;
@@ -222,6 +267,7 @@ std::string BiasOptions::Check() const {
   if (!(coarse_step_px > 0)) return "coarse_step_px must be > 0, got " + Num(coarse_step_px);
   if (!(final_step_px > 0)) return "final_step_px must be > 0, got " + Num(final_step_px);
   if (max_neighbours < 1) return "max_neighbours must be >= 1, got " + Num(max_neighbours);
+  if (!(solved_cache_mb >= 0)) return "solved_cache_mb must be >= 0, got " + Num(solved_cache_mb);
   return refine.Check();
 }
 
@@ -282,6 +328,7 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
     pb.gsd_m += v.gsd_m / nv;
   }
 
+  SolvedLevels solved(pb, options.solved_cache_mb * double(1 << 20));
   // Breadth-first over the pair graph: next, the view with most pairs to solved views.
   for (;;) {
     int view = -1;
@@ -297,7 +344,7 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
       if (neighbours.size() > best_neighbours.size()) view = v, best_neighbours = neighbours;
     }
     if (view < 0) break;
-    const Eigen::Vector2d d = SolveView(pb, view, best_neighbours, coarse_level, progress,
+    const Eigen::Vector2d d = SolveView(pb, &solved, view, best_neighbours, coarse_level, progress,
                                         &out.zncc_before[view], &out.zncc_after[view]);
     out.bias_col_row_px[view] = d;
     out.solved[view] = true;
