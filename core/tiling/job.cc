@@ -107,14 +107,21 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
   if (n > 1 && spec.refine.estimate_bias) {
     const auto t_bias = Clock::now();
     int index = 0;
-    out.job_bias_px = EstimateJobBiases(spec, out.plan, &index, progress);
-    out.bias_tile = out.plan.tiles[index].Name();
-    for (size_t i = 0; i < spec.images.size(); ++i)
-      tile_spec.images[i].bias_col_row_px += out.job_bias_px[i];
-    tile_spec.refine.estimate_bias = false;
+    try {
+      out.job_bias_px = EstimateJobBiases(spec, out.plan, &index, progress);
+      out.bias_tile = out.plan.tiles[index].Name();
+      for (size_t i = 0; i < spec.images.size(); ++i)
+        tile_spec.images[i].bias_col_row_px += out.job_bias_px[i];
+      tile_spec.refine.estimate_bias = false;
+      spdlog::info("job: biases estimated once over tile {} ({:.1f} s), used by all {} tiles",
+                   out.bias_tile, Seconds(t_bias), n);
+    } catch (const Error& e) {  // e.g. the central tile has no surface: each tile estimates
+      if (e.code() == ErrorCode::kCancelled) throw;
+      out.job_bias_px.clear();
+      spdlog::warn("job: biases not estimated over tile {} ({}); each tile estimates its own",
+                   out.plan.tiles[index].Name(), e.what());
+    }
     out.bias_s = Seconds(t_bias);
-    spdlog::info("job: biases estimated once over tile {} ({:.1f} s), used by all {} tiles",
-                 out.bias_tile, out.bias_s, n);
   }
 
   // Worker pool: each thread takes the next tile until none is left.

@@ -27,7 +27,8 @@ struct JobOutputs {
   // Tiled jobs with estimate_bias: the biases estimated once, over the tile nearest the
   // AOI's centre, and given to every tile (spec order; zero for an image that tile's
   // area does not see; each tile's view_bias_px repeats them in its view order); bias_s
-  // its time (reading that tile's windows included).
+  // its time (reading that tile's windows included). If that tile cannot give them (no
+  // surface, no pair), empty, and every tile estimates its own as before.
   std::vector<Eigen::Vector2d> job_bias_px;
   std::string bias_tile;
   double bias_s = 0;

@@ -196,6 +196,26 @@ TEST_F(TiledJob, BiasesAreEstimatedOnceForTheJob) {
   }
 }
 
+TEST_F(TiledJob, WhenTheBiasTileHasNoSurfaceEachTileEstimatesItsOwn) {
+  // The west half of the initial DSM as nodata: tile 0_0, where the job's biases would be
+  // estimated, has no surface.
+  Dsm initial = ReadDsm(scene_ + "/initial/dsm.tif");
+  for (int j = 0; j < initial.height; ++j)
+    for (int i = 0; i < initial.width / 2 + 10; ++i) initial.at(i, j) = NAN;
+  const std::string out = OutDir("bias_fallback");
+  fs::create_directories(out);
+  JobSpec spec = Spec();
+  spec.initial_dsm = out + "/half.tif";
+  WriteDsm(spec.initial_dsm, initial);
+  spec.refine.estimate_bias = true;
+  spec.refine.iterations_per_level = 1;
+  const JobOutputs o = RunJob(spec, out);
+  EXPECT_TRUE(o.job_bias_px.empty());
+  EXPECT_EQ(o.assembly.tiles_ok, 2);
+  for (const auto& t : o.tiles)
+    if (t.ok) EXPECT_EQ(t.view_bias_px.size(), t.view_names.size()) << t.name << ": its own";
+}
+
 TEST_F(TiledJob, ATinyBudgetIsRefusedNamingBudgetAndNeed) {
   JobSpec spec = Spec();
   spec.tiling = TilingOptions{};
