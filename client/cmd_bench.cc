@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 
 #include "client/args.h"
@@ -82,6 +83,44 @@ void PrintLevels(const RefineResult& refine) {
   }
 }
 
+// The whole job's wall time by stage, for any job (one tile or many). Tile stages are
+// summed over tiles: with several workers they add up to more than the wall time.
+std::vector<std::pair<std::string, double>> JobStages(const JobOutputs& o) {
+  std::vector<std::pair<std::string, double>> stages;
+  double prepare = 0, bias = o.bias_s, setup = 0, write = 0;
+  std::map<int, double> levels;
+  for (const TileResult& t : o.tiles) {
+    prepare += t.prepare_s;
+    bias += t.bias_s;
+    write += t.write_s;
+    double levels_s = 0;
+    for (const LevelStats& l : t.refine.levels) levels[l.level] += l.level_s, levels_s += l.level_s;
+    setup += std::max(0.0, t.refine_s - t.bias_s - levels_s);
+  }
+  stages.push_back({"plan (DSM header, memory estimates)", o.plan_s});
+  stages.push_back({"read image windows, initial mesh", prepare});
+  stages.push_back({o.bias_tile.empty() ? "bias estimation (per tile)"
+                                        : "bias estimation (once, tile " + o.bias_tile + ")",
+                    bias});
+  stages.push_back({"pyramids, pairs, coarse remesh", setup});
+  for (auto it = levels.rbegin(); it != levels.rend(); ++it)
+    stages.push_back({"level " + std::to_string(it->first), it->second});
+  stages.push_back({"write tiles (dsm, ply, glb)", write});
+  stages.push_back({"assemble (mesh.ply, dsm.tif, seams)", o.assembly.assemble_s});
+  return stages;
+}
+
+void PrintJobStages(const JobOutputs& o) {
+  std::printf("\nwhole job: %zu tile(s), %d worker(s)\n%-44s %9s %7s\n", o.tiles.size(), o.workers,
+              "stage", "wall s", "share");
+  for (const auto& [name, s] : JobStages(o))
+    std::printf("%-44s %9.1f %6.1f%%\n", name.c_str(), s, 100 * s / std::max(1e-9, o.total_s));
+  double estimated = 0;
+  for (const TileResult& t : o.tiles) estimated = std::max(estimated, t.estimated_peak_mb);
+  std::printf("%-44s %9.1f\npeak RSS %.0f MB (largest tile's estimate %.0f MB)\n", "total",
+              o.total_s, o.peak_rss_mb, estimated);
+}
+
 int RunBench(const std::vector<std::string>& argv) {
   const Args args(argv, {"help"});
   if (args.Has("help") || !args.positionals().empty()) {
@@ -112,6 +151,18 @@ int RunBench(const std::vector<std::string>& argv) {
   const JobOutputs outputs = RunJobFile(job, (fs::path(out) / "result").string(), overrides);
   const double run_s = Seconds(refine_start), run_cpu_s = CpuSeconds() - cpu_before_run;
   const RefineResult& refine = outputs.refine;
+  PrintJobStages(outputs);
+  nlohmann::json stages = nlohmann::json::array();
+  for (const auto& [name, seconds] : JobStages(outputs)) stages.push_back({{"stage", name}, {"s", seconds}});
+  report["stages"] = stages;
+  report["total_s"] = outputs.total_s;
+  report["peak_rss_mib"] = PeakRssMib();
+  if (refine.levels.empty()) {  // a tiled job: no one tile's levels to time Embree against
+    std::printf("(a tiled job: per-level iteration times and Embree alone are reported for "
+                "one-tile jobs; run one tile with --set aoi=... for them)\n");
+    if (args.Has("json")) std::ofstream(args.Require("json")) << report.dump(2) << "\n";
+    return kExitOk;
+  }
   PrintLevels(refine);
 
   // Embree alone on the final mesh with the rays of one level-0 iteration.

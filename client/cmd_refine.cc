@@ -12,14 +12,19 @@ int RunRefine(const std::vector<std::string>& argv) {
   const Args args(argv, {"help"});
   if (args.Has("help") || args.positionals().size() != 1) {
     std::printf(
-        "usage: satmesh refine JOB.json --out DIR [--set key=value ...]\n"
+        "usage: satmesh refine JOB.json --out DIR [--memory-budget MB] [--set key=value ...]\n"
         "  Refines the job's initial surface tile by tile; writes DIR/mesh.ply, DIR/dsm.tif,\n"
         "  DIR/tiles/<x>_<y>.glb, DIR/tileset.json and DIR/metrics.json.\n"
         "  --set overrides an option of proto/job.schema.json (e.g. --set levels=2,\n"
-        "  --set tiling.size_m=100 --set tiling.workers=2).\n");
+        "  --set tiling.size_m=100 --set tiling.workers=2).\n"
+        "  --memory-budget MB: one worker's peak memory (tiling.memory_budget_mb; default a\n"
+        "  quarter of the machine's memory / workers): a job without tiling is cut into\n"
+        "  tiles that fit it; a tile that cannot fit is refused, naming budget and need.\n");
     return args.Has("help") ? kExitOk : kExitUsage;
   }
-  const auto outputs = RunJobFile(args.positionals()[0], args.Require("out"), args.GetAll("set"));
+  std::vector<std::string> overrides = args.GetAll("set");
+  if (const auto budget = args.Get("memory-budget")) overrides.push_back("tiling.memory_budget_mb=" + *budget);
+  const auto outputs = RunJobFile(args.positionals()[0], args.Require("out"), overrides);
   for (const auto& level : outputs.refine.levels) {
     if (level.mean_zncc.empty()) continue;
     std::printf("level %d: %7d faces  mean ZNCC %.4f -> %.4f  (%.1f s)\n", level.level,
@@ -31,10 +36,11 @@ int RunRefine(const std::vector<std::string>& argv) {
       continue;
     }
     const auto& zncc = tile.refine.levels.back().mean_zncc;  // the finest level
-    std::printf("tile %-7s %2zu views  %8zu faces  level-0 ZNCC %.4f -> %.4f  %.1f s  %.0f MB images\n",
+    std::printf("tile %-7s %2zu views  %8zu faces  level-0 ZNCC %.4f -> %.4f  %.1f s  %.0f MB images"
+                "  peak est. %.0f MB, process %.0f MB\n",
                 tile.name.c_str(), tile.view_names.size(), tile.core_faces,
                 zncc.empty() ? 0.0 : zncc.front(), zncc.empty() ? 0.0 : zncc.back(), tile.refine_s,
-                tile.image_mb);
+                tile.image_mb, tile.estimated_peak_mb, tile.peak_rss_mb);
   }
   const auto& seams = outputs.assembly.seams_total;
   if (seams.cells > 0)

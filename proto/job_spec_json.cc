@@ -126,10 +126,12 @@ void ParseAoi(const json& a, JobAoi* aoi) {
 
 void ParseTiling(const json& t, TilingOptions* tiling) {
   Object(t, "tiling");
-  CheckKeys(t, "tiling", {"size_m", "overlap_m", "workers"});
+  CheckKeys(t, "tiling", {"size_m", "overlap_m", "workers", "memory_budget_mb"});
   if (t.contains("size_m")) tiling->tile_size_m = Number(t["size_m"], "tiling.size_m");
   if (t.contains("overlap_m")) tiling->overlap_m = Number(t["overlap_m"], "tiling.overlap_m");
   if (t.contains("workers")) tiling->workers = Integer(t["workers"], "tiling.workers");
+  if (t.contains("memory_budget_mb"))
+    tiling->memory_budget_mb = Number(t["memory_budget_mb"], "tiling.memory_budget_mb");
   const std::string problem = tiling->Check();
   if (!problem.empty()) Bad("tiling", problem);
 }
@@ -411,6 +413,7 @@ json TileResultToJson(const JobPlan& plan, const TileResult& t) {
   j["faces"] = t.core_faces;
   j["image_mb"] = t.image_mb;
   j["peak_rss_mb"] = t.peak_rss_mb;
+  j["estimated_peak_mb"] = t.estimated_peak_mb;
   j["levels"] = LevelsToJson(t.refine.levels);
   if (!t.view_bias_px.empty()) j["bias_px"] = BiasesToJson(t.view_bias_px);
   j["time_s"] = {{"prepare", t.prepare_s}, {"bias", t.bias_s}, {"refine", t.refine_s},
@@ -452,6 +455,7 @@ TileResult TileResultFromJson(const JobPlan& plan, const json& j) {
   }
   t.refine.levels = LevelsFromJson(j.value("levels", json::array()));
   for (const auto& b : j.value("bias_px", json::array())) t.view_bias_px.emplace_back(b.at(0).get<double>(), b.at(1).get<double>());
+  t.estimated_peak_mb = j.value("estimated_peak_mb", 0.0);
   if (j.contains("time_s")) {
     t.prepare_s = j["time_s"].value("prepare", 0.0);
     t.bias_s = j["time_s"].value("bias", 0.0);
@@ -512,7 +516,9 @@ json JobMetricsToJson(const JobOutputs& o) {
                       {"cell_m", cell},
                       {"tile_m", o.plan.tile_cells * cell},
                       {"overlap_m", o.plan.overlap_cells * cell},
-                      {"workers", o.workers}}},
+                      {"workers", o.workers},
+                      {"memory_budget_mb", o.plan.memory_budget_mb},
+                      {"automatic", o.plan.auto_tiled}}},
           {"tiles", tiles},
           {"seams", seams},
           {"seams_total", SeamToJson(o.assembly.seams_total)},
@@ -523,7 +529,7 @@ json JobMetricsToJson(const JobOutputs& o) {
                       {"faces", o.assembly.faces},
                       {"max_tile_image_mb", max_image_mb},
                       {"peak_rss_mb", peak_rss_mb}}},
-          {"time_s", {{"plan", o.plan_s}, {"tiles", o.tiles_s}, {"prepare", o.prepare_s},
+          {"time_s", {{"plan", o.plan_s}, {"bias", o.bias_s}, {"tiles", o.tiles_s}, {"prepare", o.prepare_s},
                       {"refine", refine_s}, {"write", o.write_s}, {"total", o.total_s}}},
           {"outputs", {{"mesh", "mesh.ply"}, {"dsm", "dsm.tif"}, {"tileset", "tileset.json"},
                        {"metrics", "metrics.json"}, {"tiles", "tiles/"}}}};

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "core/common/error.h"
+#include "core/tiling/memory_budget.h"
 #include "proto/job_spec_json.h"
 #include "server/api_documents.h"
 #include "server/problem.h"
@@ -120,6 +121,7 @@ std::string ServerOptions::Check() const {
                                       origin.find('/', origin.find("//") + 2) == std::string::npos);
     if (!ok) return "cors_origins: '" + origin + "' is not '*' or an origin (scheme://host[:port], no path)";
   }
+  if (!(memory_budget_mb >= 0)) return "memory_budget_mb: must be >= 0";
   std::string p = inputs.Check();
   if (!p.empty()) return p;
   return scheduler.Check();
@@ -162,6 +164,12 @@ struct ApiServer::Impl {
       if (!job.is_object()) throw HttpError(400, "bad-request", "inputs.job: must be an object (the job)");
     }
     ResolveHrefs(&job, options.inputs);
+    // The server's budget per worker, unless the job names its own (kept in the record).
+    if (job.is_object() && (!job.contains("tiling") || job["tiling"].is_object()) &&
+        !job["tiling"].contains("memory_budget_mb"))
+      job["tiling"]["memory_budget_mb"] = options.memory_budget_mb > 0
+                                              ? options.memory_budget_mb
+                                              : DefaultMemoryBudgetMb(options.scheduler.workers);
     const JobSpec spec = proto::JobSpecFromJson(job, "/");
     const std::string problem = spec.Check();
     if (!problem.empty()) ThrowError(ErrorCode::kInvalidArgument, problem);

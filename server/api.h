@@ -24,6 +24,9 @@ struct ServerOptions {
   size_t max_body_bytes = 1 << 20;       // request body limit, bytes, >= 1024
   int http_threads = 32;                 // concurrent HTTP connections served, [1, 1024]
   int max_stream_s = 3600;               // progress stream lifetime, s, >= 1
+  double memory_budget_mb = 0;           // a worker's memory budget for jobs that set no
+                                         // tiling.memory_budget_mb, MB, >= 0; 0: a quarter
+                                         // of the machine's memory / scheduler.workers
   InputPolicy inputs;
   SchedulerOptions scheduler;
   std::string Check() const;

@@ -30,7 +30,7 @@ std::string ServerUsage() {
          "         [--token T | env SATMESH_TOKEN] [--max-body-bytes 1048576]\n"
          "         [--max-images 64] [--max-tiles 1024] [--max-pixels 4000000000]\n"
          "         [--http-threads 32] [--proto-dir DIR] [--viewer-dir DIR | env SATMESH_VIEWER_DIR]\n"
-         "         [--cors-origin https://example.org ... | --cors-origin '*']\n";
+         "         [--cors-origin https://example.org ... | --cors-origin '*'] [--memory-budget MB]\n";
 }
 
 ServerOptions ParseServerArgs(const std::vector<std::string>& args,
@@ -61,6 +61,7 @@ ServerOptions ParseServerArgs(const std::vector<std::string>& args,
     else if (key == "proto-dir") o.proto_dir = value;
     else if (key == "viewer-dir") o.viewer_dir = value;
     else if (key == "cors-origin") o.cors_origins.push_back(value);
+    else if (key == "memory-budget") o.memory_budget_mb = double(ToInteger(key, value));
     else {
       bool known = false;
       for (const auto& k : extra_keys) known = known || k == key;

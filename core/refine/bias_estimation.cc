@@ -5,7 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <list>
 #include <map>
+#include <memory>
+
+#include <omp.h>
 
 #include "core/common/error.h"
 #include "core/raycast/ray_scene.h"
@@ -37,55 +41,139 @@ ViewLevel BuildLevel(const Problem& pb, int view, int level) {
   ViewLevel out = MakeViewLevel(view, level, pb.views[view].pyramid[level], pb.rpcs[view],
                                 pb.input.frame, pb.box_min, pb.box_max,
                                 pb.options.refine.virtual_camera_grid_px);
-  CastHitMap(pb.scene, &out);
+  // With the ray cosines, the warp from this view runs its AVX2 path (warp.h).
+  CastHitMap(pb.scene, &out, &pb.normals);
   return out;
 }
 
-// Mean ZNCC of the solved neighbours warped into `target` shifted by d (full-res px).
-// The target's hit map for a shift is its unshifted one moved by the rounded level shift
-// (a biased view's pixel q sees what the unbiased one sees at q - d).
-class ShiftObjective {
+// The level data of solved views (their RPCs no longer change), kept for the views solved
+// after them, least recently used dropped first beyond max_bytes. Without the hit
+// records (a neighbour's warp reads its surface points and ray cosines only).
+class SolvedLevels {
  public:
-  ShiftObjective(const Problem& pb, int target, const std::vector<int>& neighbours, int level)
-      : pb_(pb), level_(level), base_rpc_(pb.rpcs[target]), target_(BuildLevel(pb, target, level)),
-        photo_(PhotometricOptionsAt(pb.options.refine, pb.gsd_m * std::ldexp(1.0, level))) {
-    base_hits_ = target_.hit_map;
-    for (int n : neighbours) neighbours_.push_back(BuildLevel(pb, n, level));
-  }
+  SolvedLevels(const Problem& pb, double max_bytes) : pb_(pb), max_bytes_(max_bytes) {}
 
-  double operator()(const Eigen::Vector2d& d) {
-    const auto key = std::make_pair(std::lround(d.x() * 1e6), std::lround(d.y() * 1e6));
-    if (auto it = cache_.find(key); it != cache_.end()) return it->second;
-    const double scale = std::ldexp(1.0, -level_);
-    target_.rpc = base_rpc_.WithBias(base_rpc_.bias() + d).AtLevel(level_);
-    target_.projection = ProjectionGrid(target_.rpc, pb_.input.frame, pb_.box_min, pb_.box_max,
-                                        /*spacing_xy_m=*/16.0, /*spacing_z_m=*/8.0);
-    ShiftHitMap(int(std::lround(d.x() * scale)), int(std::lround(d.y() * scale)));
-    double sum = 0;
-    long windows = 0;
-    for (const ViewLevel& n : neighbours_) {
-      const PairEnergy e = AccumulatePhotometricGradient(n, target_, pb_.input.initial_mesh,
-                                                         pb_.normals, photo_, nullptr, nullptr,
-                                                         &workspace_);
-      sum += e.sum_zncc;
-      windows += e.num_windows;
+  std::shared_ptr<const ViewLevel> Get(int view, int level) {
+    const auto key = std::make_pair(view, level);
+    for (auto it = entries_.begin(); it != entries_.end(); ++it) {
+      if (it->key != key) continue;
+      entries_.splice(entries_.begin(), entries_, it);  // most recent first
+      return entries_.front().level;
     }
-    const double value = windows >= 16 ? sum / double(windows) : -1.0;
-    cache_[key] = value;
-    return value;
+    ViewLevel built = BuildLevel(pb_, view, level);
+    built.hit_map.hits = {};
+    const size_t pixels = built.image.pixels.size();
+    const double bytes = double(pixels) * (sizeof(float) + sizeof(Eigen::Vector3f) +
+                                           sizeof(SurfacePoint) + sizeof(float));
+    auto shared = std::make_shared<const ViewLevel>(std::move(built));
+    entries_.push_front({key, shared, bytes});
+    bytes_ += bytes;
+    while (bytes_ > max_bytes_ && !entries_.empty()) {
+      bytes_ -= entries_.back().bytes;
+      entries_.pop_back();  // still alive while an objective holds it
+    }
+    return shared;
   }
 
  private:
-  void ShiftHitMap(int dx, int dy) {
-    const int w = target_.width(), h = target_.height();
-    HitMap& map = target_.hit_map;
+  struct Entry {
+    std::pair<int, int> key;
+    std::shared_ptr<const ViewLevel> level;
+    double bytes;
+  };
+  const Problem& pb_;
+  double max_bytes_;
+  double bytes_ = 0;
+  std::list<Entry> entries_;
+};
+
+// Mean ZNCC of the solved neighbours warped into `target` shifted by d (full-res px).
+// The target's hit map for a shift is its unshifted one moved by the rounded level shift
+// (a biased view's pixel q sees what the unbiased one sees at q - d). Shifts are
+// evaluated in parallel, one per thread; each thread has its own shifted copy of the
+// target (what the warp into it reads: image, projection lattice, surface points).
+class ShiftObjective {
+ public:
+  ShiftObjective(const Problem& pb, int target, const std::vector<int>& neighbours, int level,
+                 SolvedLevels* solved)
+      : pb_(pb), level_(level), base_rpc_(pb.rpcs[target]),
+        photo_(PhotometricOptionsAt(pb.options.refine, pb.gsd_m * std::ldexp(1.0, level))) {
+    ViewLevel base = BuildLevel(pb, target, level);
+    base_surface_ = std::move(base.hit_map.surface);
+    slots_.resize(std::max(1, omp_get_max_threads()));
+    for (Slot& s : slots_) {
+      s.target.view = base.view;
+      s.target.level = level;
+      s.target.image = base.image;
+      s.target.hit_map.surface.resize(base_surface_.size());
+    }
+    for (int n : neighbours) neighbours_.push_back(solved->Get(n, level));
+  }
+
+  double operator()(const Eigen::Vector2d& d) { return Evaluate({d}).front(); }
+
+  // The objective at each shift (cached: a shift is computed once).
+  std::vector<double> Evaluate(const std::vector<Eigen::Vector2d>& shifts) {
+    std::vector<Eigen::Vector2d> todo;
+    for (const Eigen::Vector2d& d : shifts)
+      if (!cache_.count(Key(d)) &&
+          std::none_of(todo.begin(), todo.end(), [&](const auto& t) { return Key(t) == Key(d); }))
+        todo.push_back(d);
+    std::vector<double> values(todo.size());
+    if (todo.size() == 1) {
+      values[0] = Compute(todo[0], &slots_[0]);  // the warp's rows in parallel
+    } else {
+#pragma omp parallel for schedule(dynamic, 1)
+      for (size_t k = 0; k < todo.size(); ++k)
+        values[k] = Compute(todo[k], &slots_[omp_get_thread_num() % slots_.size()]);
+    }
+    for (size_t k = 0; k < todo.size(); ++k) cache_[Key(todo[k])] = values[k];
+    std::vector<double> out;
+    for (const Eigen::Vector2d& d : shifts) out.push_back(cache_.at(Key(d)));
+    return out;
+  }
+
+ private:
+  struct Slot {
+    ViewLevel target;
+    PairWorkspace workspace;
+  };
+  static std::pair<long, long> Key(const Eigen::Vector2d& d) {
+    return {std::lround(d.x() * 1e6), std::lround(d.y() * 1e6)};
+  }
+
+  double Compute(const Eigen::Vector2d& d, Slot* slot) const {
+    ViewLevel& target = slot->target;
+    const double scale = std::ldexp(1.0, -level_);
+    target.rpc = base_rpc_.WithBias(base_rpc_.bias() + d).AtLevel(level_);
+    target.projection = ProjectionGrid(target.rpc, pb_.input.frame, pb_.box_min, pb_.box_max,
+                                       /*spacing_xy_m=*/16.0, /*spacing_z_m=*/8.0);
+    ShiftSurface(int(std::lround(d.x() * scale)), int(std::lround(d.y() * scale)),
+                 &target.hit_map.surface);
+    double sum = 0;
+    long windows = 0;
+    for (const auto& n : neighbours_) {
+      const PairEnergy e =
+          AccumulatePairGradient(*n, target, pb_.normals, photo_, nullptr, &slot->workspace);
+      sum += e.sum_zncc;
+      windows += e.num_windows;
+    }
+    return windows >= 16 ? sum / double(windows) : -1.0;
+  }
+
+  void ShiftSurface(int dx, int dy, std::vector<SurfacePoint>* surface) const {
+    const int w = slots_[0].target.width(), h = slots_[0].target.height();
     for (int row = 0; row < h; ++row) {
+      SurfacePoint* out = surface->data() + size_t(row) * w;
+      const int r = row - dy;
+      if (r < 0 || r >= h) {
+        std::fill(out, out + w, SurfacePoint{});
+        continue;
+      }
+      const SurfacePoint* in = base_surface_.data() + size_t(r) * w;
       for (int col = 0; col < w; ++col) {
-        const int c = col - dx, r = row - dy;
-        const size_t p = size_t(row) * w + col;
-        const bool inside = c >= 0 && r >= 0 && c < w && r < h;
-        map.hits[p] = inside ? base_hits_.hits[size_t(r) * w + c] : RayHit{};
-        map.surface[p] = inside ? base_hits_.surface[size_t(r) * w + c] : SurfacePoint{};
+        const int c = col - dx;
+        out[col] = c >= 0 && c < w ? in[c] : SurfacePoint{};
       }
     }
   }
@@ -93,25 +181,27 @@ class ShiftObjective {
   const Problem& pb_;
   int level_;
   RpcModel base_rpc_;
-  ViewLevel target_;
-  HitMap base_hits_;
-  std::vector<ViewLevel> neighbours_;
+  std::vector<SurfacePoint> base_surface_;
+  std::vector<Slot> slots_;
+  std::vector<std::shared_ptr<const ViewLevel>> neighbours_;
   PhotometricOptions photo_;
-  PairWorkspace workspace_;
   std::map<std::pair<long, long>, double> cache_;
 };
 
 // One 3x3 step at spacing h: a quadratic fit (least squares on the 9 values); its maximum
 // if the fit is concave (clamped to +-h per axis), else the best of the 9.
 Eigen::Vector2d QuadraticStep(ShiftObjective& f, const Eigen::Vector2d& d, double h) {
+  std::vector<Eigen::Vector2d> points;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) points.push_back(d + h * Eigen::Vector2d(i - 1, j - 1));
+  const std::vector<double> values = f.Evaluate(points);
   double v[3][3];
   Eigen::Vector2d best = d;
   double best_value = -1e30;
   for (int j = 0; j < 3; ++j) {
     for (int i = 0; i < 3; ++i) {
-      const Eigen::Vector2d p = d + h * Eigen::Vector2d(i - 1, j - 1);
-      v[j][i] = f(p);
-      if (v[j][i] > best_value) best_value = v[j][i], best = p;
+      v[j][i] = values[3 * j + i];
+      if (v[j][i] > best_value) best_value = v[j][i], best = points[3 * j + i];
     }
   }
   double gx = 0, gy = 0, hxx = 0, hyy = 0;
@@ -131,22 +221,24 @@ Eigen::Vector2d QuadraticStep(ShiftObjective& f, const Eigen::Vector2d& d, doubl
 }
 
 // Coarse grid search, then 3x3 quadratic steps level by level down to full resolution.
-Eigen::Vector2d SolveView(const Problem& pb, int view, const std::vector<int>& neighbours,
+Eigen::Vector2d SolveView(const Problem& pb, SolvedLevels* solved, int view,
+                          const std::vector<int>& neighbours,
                           int coarse_level, const Progress& progress, double* zncc_before,
                           double* zncc_after) {
   const BiasOptions& o = pb.options;
   Eigen::Vector2d d(0, 0);
   for (int level = coarse_level; level >= 0; --level) {
     progress.ThrowIfCancelled();
-    ShiftObjective f(pb, view, neighbours, level);
+    ShiftObjective f(pb, view, neighbours, level, solved);
     if (level == coarse_level) {
       const int n = int(std::floor(o.search_radius_px / o.coarse_step_px));
-      double best = -1e30;
+      std::vector<Eigen::Vector2d> grid;
       for (int j = -n; j <= n; ++j)
-        for (int i = -n; i <= n; ++i) {
-          const Eigen::Vector2d p = o.coarse_step_px * Eigen::Vector2d(i, j);
-          if (const double v = f(p); v > best) best = v, d = p;
-        }
+        for (int i = -n; i <= n; ++i) grid.push_back(o.coarse_step_px * Eigen::Vector2d(i, j));
+      const std::vector<double> values = f.Evaluate(grid);
+      double best = -1e30;
+      for (size_t k = 0; k < grid.size(); ++k)
+        if (values[k] > best) best = values[k], d = grid[k];
       d = QuadraticStep(f, d, 0.5 * o.coarse_step_px);
     }
     if (level == 0) {
@@ -175,6 +267,7 @@ std::string BiasOptions::Check() const {
   if (!(coarse_step_px > 0)) return "coarse_step_px must be > 0, got " + Num(coarse_step_px);
   if (!(final_step_px > 0)) return "final_step_px must be > 0, got " + Num(final_step_px);
   if (max_neighbours < 1) return "max_neighbours must be >= 1, got " + Num(max_neighbours);
+  if (!(solved_cache_mb >= 0)) return "solved_cache_mb must be >= 0, got " + Num(solved_cache_mb);
   return refine.Check();
 }
 
@@ -235,6 +328,7 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
     pb.gsd_m += v.gsd_m / nv;
   }
 
+  SolvedLevels solved(pb, options.solved_cache_mb * double(1 << 20));
   // Breadth-first over the pair graph: next, the view with most pairs to solved views.
   for (;;) {
     int view = -1;
@@ -250,7 +344,7 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
       if (neighbours.size() > best_neighbours.size()) view = v, best_neighbours = neighbours;
     }
     if (view < 0) break;
-    const Eigen::Vector2d d = SolveView(pb, view, best_neighbours, coarse_level, progress,
+    const Eigen::Vector2d d = SolveView(pb, &solved, view, best_neighbours, coarse_level, progress,
                                         &out.zncc_before[view], &out.zncc_after[view]);
     out.bias_col_row_px[view] = d;
     out.solved[view] = true;

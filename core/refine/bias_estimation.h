@@ -24,6 +24,8 @@ struct BiasOptions {
   double final_step_px = 0.125;    // smallest 3x3 spacing at full resolution, full-res px, > 0
   int max_neighbours = 3;          // solved views a view is matched against (first in the
                                    // pair order: Refine gives them best score first), >= 1
+  double solved_cache_mb = 1024;   // solved views' level data (rays, surface points) kept
+                                   // for the views matched against them later, MB, >= 0
   RefineOptions refine;            // ZNCC window, visibility, virtual cameras (as the refinement)
   std::string Check() const;
 };

@@ -12,6 +12,8 @@
 
 #include "core/common/error.h"
 #include "core/common/threads.h"
+#include "core/refine/bias_estimation.h"
+#include "core/tiling/tile_input.h"
 
 namespace satmesh {
 namespace {
@@ -44,7 +46,37 @@ class PoolProgress {
   std::vector<double> fractions_;
 };
 
+int CentralTile(const JobPlan& plan) {
+  double cx = 0, cy = 0;
+  for (const PlannedTile& t : plan.tiles)
+    cx += 0.5 * (t.core.xmin + t.core.xmax), cy += 0.5 * (t.core.ymin + t.core.ymax);
+  cx /= double(plan.tiles.size()), cy /= double(plan.tiles.size());
+  int best = 0;
+  double best_d2 = 1e300;
+  for (size_t i = 0; i < plan.tiles.size(); ++i) {
+    const Box2d& c = plan.tiles[i].core;
+    const double dx = 0.5 * (c.xmin + c.xmax) - cx, dy = 0.5 * (c.ymin + c.ymax) - cy;
+    if (dx * dx + dy * dy < best_d2) best_d2 = dx * dx + dy * dy, best = int(i);
+  }
+  return best;
+}
+
 }  // namespace
+
+std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPlan& plan,
+                                               int* tile_index, const Progress& progress) {
+  SATMESH_CHECK(!plan.tiles.empty(), ErrorCode::kInvalidArgument, "bias: the plan has no tile");
+  *tile_index = CentralTile(plan);
+  const TileInput input = PrepareTileInput(spec, plan, *tile_index);
+  BiasOptions options;
+  options.refine = spec.refine;
+  const BiasEstimate estimate = EstimateRefineBiases(input.refine, options, progress);
+  std::vector<Eigen::Vector2d> bias(spec.images.size(), Eigen::Vector2d::Zero());
+  for (size_t v = 0; v < input.view_names.size(); ++v)
+    for (size_t i = 0; i < spec.images.size(); ++i)
+      if (spec.images[i].path == input.view_names[v]) bias[i] = estimate.bias_col_row_px[v];
+  return bias;
+}
 
 std::string JobSpec::Check() const {
   if (images.size() < 2) return "images: need at least 2, got " + std::to_string(images.size());
@@ -69,8 +101,30 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
   out.plan_s = Seconds(t_start);
   std::filesystem::create_directories(std::filesystem::path(out_dir) / "tiles");
 
-  // Worker pool: each thread takes the next tile until none is left.
+  // Tiled: the biases once for the job (every tile then refines with the same RPCs).
   const size_t n = out.plan.tiles.size();
+  JobSpec tile_spec = spec;
+  if (n > 1 && spec.refine.estimate_bias) {
+    const auto t_bias = Clock::now();
+    int index = 0;
+    try {
+      out.job_bias_px = EstimateJobBiases(spec, out.plan, &index, progress);
+      out.bias_tile = out.plan.tiles[index].Name();
+      for (size_t i = 0; i < spec.images.size(); ++i)
+        tile_spec.images[i].bias_col_row_px += out.job_bias_px[i];
+      tile_spec.refine.estimate_bias = false;
+      spdlog::info("job: biases estimated once over tile {} ({:.1f} s), used by all {} tiles",
+                   out.bias_tile, Seconds(t_bias), n);
+    } catch (const Error& e) {  // e.g. the central tile has no surface: each tile estimates
+      if (e.code() == ErrorCode::kCancelled) throw;
+      out.job_bias_px.clear();
+      spdlog::warn("job: biases not estimated over tile {} ({}); each tile estimates its own",
+                   out.plan.tiles[index].Name(), e.what());
+    }
+    out.bias_s = Seconds(t_bias);
+  }
+
+  // Worker pool: each thread takes the next tile until none is left.
   const bool single = n == 1;
   out.workers = int(std::min<size_t>(spec.tiling.workers, n));
   out.tiles.resize(n);
@@ -82,7 +136,7 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
     for (size_t i = next++; i < n && !cancelled; i = next++) {
       const std::string name = out.plan.tiles[i].Name();
       try {
-        out.tiles[i] = RunTile(spec, out.plan, int(i), out_dir, pool_progress.ForTile(i, name), single);
+        out.tiles[i] = RunTile(tile_spec, out.plan, int(i), out_dir, pool_progress.ForTile(i, name), single);
       } catch (const Error&) {  // only kCancelled escapes RunTile
         cancelled = true;
       }
@@ -99,6 +153,14 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
     for (auto& t : threads) t.join();
   }
   out.tiles_s = Seconds(t_tiles);
+  // The job's biases, in each tile's view order, as a tile that estimated them reports.
+  if (!out.job_bias_px.empty())
+    for (TileResult& t : out.tiles) {
+      t.view_bias_px.clear();
+      for (const std::string& name : t.view_names)
+        for (size_t i = 0; i < spec.images.size(); ++i)
+          if (spec.images[i].path == name) t.view_bias_px.push_back(out.job_bias_px[i]);
+    }
   if (cancelled || progress.Cancelled()) ThrowError(ErrorCode::kCancelled, "cancelled by the caller");
 
   const auto failed = [](const TileResult& t) { return !t.ok; };

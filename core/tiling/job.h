@@ -24,8 +24,23 @@ struct JobOutputs {
   int workers = 1;
   double plan_s = 0, tiles_s = 0, total_s = 0;
   double prepare_s = 0, write_s = 0;    // summed over tiles (+ assembly for write_s)
+  // Tiled jobs with estimate_bias: the biases estimated once, over the tile nearest the
+  // AOI's centre, and given to every tile (spec order; zero for an image that tile's
+  // area does not see; each tile's view_bias_px repeats them in its view order); bias_s
+  // its time (reading that tile's windows included). If that tile cannot give them (no
+  // surface, no pair), empty, and every tile estimates its own as before.
+  std::vector<Eigen::Vector2d> job_bias_px;
+  std::string bias_tile;
+  double bias_s = 0;
   double peak_rss_mb = 0;          // process peak resident memory at the end
 };
+
+// The job's per-image RPC biases, estimated once over the planned tile nearest the AOI's
+// centre (which fits the memory budget like every tile), in spec.images order, added to
+// the spec's biases; an image that tile does not see keeps its bias. Throws like RunTile
+// for that tile (Error; kCancelled when cancelled).
+std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPlan& plan,
+                                               int* tile_index, const Progress& progress = {});
 
 // Plans, refines every tile on spec.tiling.workers threads (a failing tile is recorded
 // with its reason and the others still finish), then assembles out_dir/mesh.ply,

@@ -23,8 +23,23 @@ double Median(std::vector<float> values) {
   return *mid;
 }
 
-// The pixel window of `rpc` that sees the box [x0,x1]x[y0,y1]x[h0,h1] (geodetic corners).
-PixelWindow WindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vector3d>& box_geo,
+// The DSM, block-averaged by `factor`, as a mesh in `frame`.
+TriangleMesh DsmMeshInFrame(const Dsm& dsm, int factor, const LocalFrame& frame) {
+  const CrsTransform geo_from_dsm(dsm.crs_wkt, kWgs84Geographic3D);
+  TriangleMesh mesh = MeshFromDsm(DownsampleDsm(dsm, factor));
+  std::vector<Eigen::Vector3d> points(mesh.vertices.size());
+  for (size_t i = 0; i < points.size(); ++i) points[i] = mesh.AbsoluteVertex(i);
+  geo_from_dsm.Apply(&points);
+  mesh.origin.setZero();
+  mesh.crs.clear();
+  for (size_t i = 0; i < points.size(); ++i)
+    mesh.vertices[i] = frame.LocalFromGeo(points[i]).cast<float>();
+  return mesh;
+}
+
+}  // namespace
+
+PixelWindow ImageWindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vector3d>& box_geo,
                          const RasterInfo& info, int margin_px) {
   double cmin = 1e300, cmax = -1e300, rmin = 1e300, rmax = -1e300;
   for (const auto& p : box_geo) {
@@ -42,21 +57,9 @@ PixelWindow WindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vector3d>
   return w;
 }
 
-// The DSM, block-averaged by `factor`, as a mesh in `frame`.
-TriangleMesh DsmMeshInFrame(const Dsm& dsm, int factor, const LocalFrame& frame) {
-  const CrsTransform geo_from_dsm(dsm.crs_wkt, kWgs84Geographic3D);
-  TriangleMesh mesh = MeshFromDsm(DownsampleDsm(dsm, factor));
-  std::vector<Eigen::Vector3d> points(mesh.vertices.size());
-  for (size_t i = 0; i < points.size(); ++i) points[i] = mesh.AbsoluteVertex(i);
-  geo_from_dsm.Apply(&points);
-  mesh.origin.setZero();
-  mesh.crs.clear();
-  for (size_t i = 0; i < points.size(); ++i)
-    mesh.vertices[i] = frame.LocalFromGeo(points[i]).cast<float>();
-  return mesh;
+int TileWindowMarginPx(const RefineOptions& options, double cell_m) {
+  return 8 + 4 * (1 << ResolveLevels(options, cell_m, cell_m));
 }
-
-}  // namespace
 
 Dsm DownsampleDsm(const Dsm& dsm, int factor) {
   if (factor <= 1) return dsm;
@@ -113,11 +116,11 @@ TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
   tile.refine.initial_cell_m = cell_m;
   // Window margin for the coarsest level's pixels (the GSD is not known yet: the DSM's cell
   // stands in for it, as in CoarseCellSize).
-  const int margin_px = 8 + 4 * (1 << ResolveLevels(spec.refine, cell_m, cell_m));
+  const int margin_px = TileWindowMarginPx(spec.refine, cell_m);
   for (const auto& image : spec.images) {
     const RpcModel rpc = ReadRpc(image.path).WithBias(image.bias_col_row_px);
     const RasterInfo info = ReadRasterInfo(image.path);
-    const PixelWindow window = WindowSeeing(rpc, box_geo, info, margin_px);
+    const PixelWindow window = ImageWindowSeeing(rpc, box_geo, info, margin_px);
     if (window.width < 16 || window.height < 16) {
       spdlog::info("image '{}' does not see the area; dropped", image.path);
       tile.dropped_views.push_back(image.path);

@@ -6,7 +6,9 @@
 #include <vector>
 
 #include "core/dsm/dsm.h"
+#include "core/image/image_io.h"
 #include "core/refine/refine.h"
+#include "core/rpc/rpc_model.h"
 #include "core/tiling/job_spec.h"
 #include "core/tiling/tile_plan.h"
 
@@ -20,6 +22,15 @@ struct TileInput {
   double image_bytes = 0;    // full-resolution image windows held, bytes
   size_t filled_dsm_cells = 0;  // the DSM's empty cells filled before meshing (FillDsmHoles)
 };
+
+// The pixel window of `rpc` that sees the points `box_geo` (geodetic corners of a 3D box),
+// widened by margin_px and clipped to the raster.
+PixelWindow ImageWindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vector3d>& box_geo,
+                              const RasterInfo& info, int margin_px);
+
+// Window margin for the coarsest level's pixels (the GSD is not known before the images
+// are read: the DSM's cell stands in for it, as in CoarseCellSize).
+int TileWindowMarginPx(const RefineOptions& options, double cell_m);
 
 // Downsamples a DSM by an integer factor (NaN-aware block mean; a block with no valid
 // cell stays NaN).

@@ -12,6 +12,7 @@
 #include "core/common/error.h"
 #include "core/common/gdal_init.h"
 #include "core/geo/crs.h"
+#include "core/tiling/memory_budget.h"
 
 namespace satmesh {
 namespace {
@@ -81,6 +82,40 @@ PixelWindow Intersect(const PixelWindow& w, int width, int height) {
   return out;
 }
 
+// The tile grid over the AOI's cells, tiles of `tile_cells` cells, x from the west, y
+// from the south; each tile's memory estimated.
+void CutTiles(const JobSpec& spec, const std::vector<ImageFootprintModel>& images,
+              int tile_cells, JobPlan* plan_out) {
+  JobPlan& plan = *plan_out;
+  plan.tile_cells = tile_cells;
+  plan.tiles.clear();
+  const PixelWindow& a = plan.aoi_cells;
+  // The last column/row takes the remainder: a sliver under half a tile joins its
+  // neighbour (so edges are in [0.5, 1.5) tiles), never a tile of a few cells.
+  plan.nx = std::max(1, (a.width + plan.tile_cells / 2) / plan.tile_cells);
+  plan.ny = std::max(1, (a.height + plan.tile_cells / 2) / plan.tile_cells);
+  const auto aoi = MakePolygon(plan.aoi_polygon);
+  for (int ty = 0; ty < plan.ny; ++ty) {
+    for (int tx = 0; tx < plan.nx; ++tx) {
+      PlannedTile tile;
+      tile.x = tx, tile.y = ty;
+      const int col0 = a.col0 + tx * plan.tile_cells;
+      const int row1 = a.row0 + a.height - ty * plan.tile_cells;  // exclusive, south edge
+      const int row0 = ty == plan.ny - 1 ? a.row0 : row1 - plan.tile_cells;
+      const int width = tx == plan.nx - 1 ? a.col0 + a.width - col0 : plan.tile_cells;
+      tile.core_cells = {col0, row0, width, row1 - row0};
+      const int o = plan.overlap_cells;
+      tile.padded_cells = Intersect({col0 - o, row0 - o, tile.core_cells.width + 2 * o,
+                                     tile.core_cells.height + 2 * o}, plan.dsm.width, plan.dsm.height);
+      tile.core = plan.dsm.BoxOf(tile.core_cells);
+      tile.padded = plan.dsm.BoxOf(tile.padded_cells);
+      if (!spec.aoi.polygon.empty() && !MakePolygon(BoxRing(tile.core))->Intersects(aoi.get())) continue;
+      tile.memory = EstimateTileMemory(spec, plan.dsm, images, tile.padded_cells);
+      plan.tiles.push_back(tile);
+    }
+  }
+}
+
 }  // namespace
 
 std::string TilingOptions::Check() const {
@@ -89,6 +124,9 @@ std::string TilingOptions::Check() const {
   if (!(overlap_m >= 0) || !std::isfinite(overlap_m))
     return "tiling.overlap_m must be >= 0, got " + std::to_string(overlap_m);
   if (workers < 1 || workers > 256) return "tiling.workers must be in [1, 256], got " + std::to_string(workers);
+  if (!(memory_budget_mb >= 0) || !std::isfinite(memory_budget_mb))
+    return "tiling.memory_budget_mb must be >= 0 (0 = from the machine's memory), got " +
+           std::to_string(memory_budget_mb);
   return "";
 }
 
@@ -178,37 +216,46 @@ JobPlan PlanJob(const JobSpec& spec) {
   SATMESH_CHECK(plan.aoi_cells.width > 0 && plan.aoi_cells.height > 0, ErrorCode::kInvalidInput,
                 "aoi: does not overlap the initial DSM '" + spec.initial_dsm + "'");
 
-  // Tile grid over the AOI cells: x from the west, y from the south.
-  const PixelWindow& a = plan.aoi_cells;
-  plan.tile_cells = spec.tiling.tile_size_m > 0
-                        ? std::max(1, int(std::lround(spec.tiling.tile_size_m / cell)))
-                        : std::max(a.width, a.height);
   plan.overlap_cells = int(std::ceil(spec.tiling.overlap_m / cell - 1e-9));
-  // The last column/row takes the remainder: a sliver under half a tile joins its
-  // neighbour (so edges are in [0.5, 1.5) tiles), never a tile of a few cells.
-  plan.nx = std::max(1, (a.width + plan.tile_cells / 2) / plan.tile_cells);
-  plan.ny = std::max(1, (a.height + plan.tile_cells / 2) / plan.tile_cells);
-  const auto aoi = MakePolygon(plan.aoi_polygon);
-  for (int ty = 0; ty < plan.ny; ++ty) {
-    for (int tx = 0; tx < plan.nx; ++tx) {
-      PlannedTile tile;
-      tile.x = tx, tile.y = ty;
-      const int col0 = a.col0 + tx * plan.tile_cells;
-      const int row1 = a.row0 + a.height - ty * plan.tile_cells;  // exclusive, south edge
-      const int row0 = ty == plan.ny - 1 ? a.row0 : row1 - plan.tile_cells;
-      const int width = tx == plan.nx - 1 ? a.col0 + a.width - col0 : plan.tile_cells;
-      tile.core_cells = {col0, row0, width, row1 - row0};
-      const int o = plan.overlap_cells;
-      tile.padded_cells = Intersect({col0 - o, row0 - o, tile.core_cells.width + 2 * o,
-                                     tile.core_cells.height + 2 * o}, plan.dsm.width, plan.dsm.height);
-      tile.core = plan.dsm.BoxOf(tile.core_cells);
-      tile.padded = plan.dsm.BoxOf(tile.padded_cells);
-      if (!spec.aoi.polygon.empty() && !MakePolygon(BoxRing(tile.core))->Intersects(aoi.get())) continue;
-      plan.tiles.push_back(tile);
+  plan.memory_budget_mb = MemoryBudgetMb(spec.tiling);
+  const std::vector<ImageFootprintModel> images = ReadImageFootprintModels(spec);
+  const PixelWindow& a = plan.aoi_cells;
+  CutTiles(spec, images, spec.tiling.tile_size_m > 0
+                             ? std::max(1, int(std::lround(spec.tiling.tile_size_m / cell)))
+                             : std::max(a.width, a.height),
+           &plan);
+  if (spec.tiling.tile_size_m == 0) {
+    // Automatic tiling: the tile edge shrinks with the square root of the share of the
+    // need over the fixed part that fits, until every tile fits.
+    const int min_cells = std::max(32, 2 * plan.overlap_cells);
+    for (;;) {
+      const auto worst = std::max_element(
+          plan.tiles.begin(), plan.tiles.end(),
+          [](const PlannedTile& x, const PlannedTile& y) { return x.memory.peak_mb < y.memory.peak_mb; });
+      if (worst == plan.tiles.end() || worst->memory.peak_mb <= plan.memory_budget_mb) break;
+      SATMESH_CHECK(plan.tile_cells > min_cells, ErrorCode::kInvalidArgument,
+                    OverBudgetMessage("the job's tile " + worst->Name() + " (" +
+                                          std::to_string(int(plan.tile_cells * cell)) +
+                                          " m, the smallest automatic tile)",
+                                      worst->memory, plan.memory_budget_mb));
+      const double share = std::max(0.0, plan.memory_budget_mb - kBaseMb) /
+                           std::max(1.0, worst->memory.peak_mb - kBaseMb);
+      const int cells = std::clamp(int(plan.tile_cells * std::sqrt(share) * 0.95), min_cells,
+                                   plan.tile_cells - 1);
+      spdlog::info("plan: tile {} needs an estimated {:.0f} MB, over the {:.0f} MB budget: "
+                   "tiles of {} cells", worst->Name(), worst->memory.peak_mb,
+                   plan.memory_budget_mb, cells);
+      plan.auto_tiled = true;
+      CutTiles(spec, images, cells, &plan);
     }
   }
-  spdlog::info("plan: AOI {}x{} cells -> {}x{} tiles of {} cells (+{} overlap), {} kept",
-               a.width, a.height, plan.nx, plan.ny, plan.tile_cells, plan.overlap_cells, plan.tiles.size());
+  double worst_mb = 0, worst_px = 0;
+  for (const PlannedTile& t : plan.tiles)
+    if (t.memory.peak_mb > worst_mb) worst_mb = t.memory.peak_mb, worst_px = t.memory.window_px;
+  spdlog::info("plan: AOI {}x{} cells -> {}x{} tiles of {} cells (+{} overlap), {} kept; "
+               "largest estimated peak {:.0f} MB ({:.0f} Mpx of image windows), budget {:.0f} MB",
+               a.width, a.height, plan.nx, plan.ny, plan.tile_cells, plan.overlap_cells,
+               plan.tiles.size(), worst_mb, worst_px / 1e6, plan.memory_budget_mb);
   return plan;
 }
 

@@ -28,11 +28,20 @@ struct DsmGrid {
   Box2d BoxOf(const PixelWindow& cells) const;
 };
 
+// Peak resident memory of refining one tile, estimated before it starts (memory_budget.h).
+struct TileMemoryEstimate {
+  int views = 0;             // images whose window sees the tile
+  double window_px = 0;      // their full-resolution window pixels, summed
+  double dsm_cells = 0;      // initial DSM cells of the padded tile
+  double peak_mb = 0;        // estimated process peak while refining it (MB = 2^20 bytes)
+};
+
 struct PlannedTile {
   int x = 0, y = 0;            // column (west -> east) and row (south -> north) of the grid
   PixelWindow core_cells;      // DSM cells kept after trimming (cell centres inside core)
   PixelWindow padded_cells;    // core + overlap, clipped to the DSM: what is refined
   Box2d core, padded;          // the same windows as boxes in the DSM's CRS
+  TileMemoryEstimate memory;   // its refinement's estimated peak
   std::string Name() const { return std::to_string(x) + "_" + std::to_string(y); }
 };
 
@@ -44,13 +53,18 @@ struct JobPlan {
   int tile_cells = 0, overlap_cells = 0;  // tile core edge and overlap, in cells
   int nx = 0, ny = 0;            // tile grid size
   std::vector<PlannedTile> tiles;  // tiles meeting the AOI, row by row from the south-west
+  double memory_budget_mb = 0;   // one worker's budget (MemoryBudgetMb of the spec's tiling)
+  bool auto_tiled = false;       // tiling.size_m was 0 and one tile would not fit the budget
   int IndexOf(int x, int y) const;  // -1 when (x, y) was not planned
 };
 
 // Reads the DSM header, maps the AOI into its CRS (edges densified) and cuts the AOI's
 // bounding cells into tiles of round(tile_size_m / cell) cells (the last row/column
-// takes the remainder, between half and one and a half tiles), keeping those whose core meets the AOI polygon. tile_size_m = 0 gives one
-// tile over the AOI. Throws Error{kInvalidArgument} naming the field for a bad spec,
+// takes the remainder, between half and one and a half tiles), keeping those whose core
+// meets the AOI polygon. Estimates each tile's peak memory (reads the images' RPCs and
+// the DSM, no pixels). tile_size_m = 0 gives one tile over the AOI if it fits the memory
+// budget, else the largest square tiles that do; Error{kInvalidArgument} naming budget
+// and need when even a tile of 2 overlaps (at least 32 cells) would not fit. Throws Error{kInvalidArgument} naming the field for a bad spec,
 // Error{kInvalidInput} for a geographic or rotated DSM or an AOI outside it.
 JobPlan PlanJob(const JobSpec& spec);
 

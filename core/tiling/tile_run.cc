@@ -12,6 +12,7 @@
 #include "core/dsm/dsm.h"
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
+#include "core/tiling/memory_budget.h"
 #include "core/tiling/tile_input.h"
 
 namespace satmesh {
@@ -89,11 +90,12 @@ float SampleDsm(const Dsm& dsm, double x, double y) {
   return weight > 0 ? float(sum / weight) : NAN;
 }
 
-// The .glb's per-vertex scalars for viewers: _HEIGHT, the ellipsoidal height (m), and
+// The .glb's per-vertex scalars for viewers: _HEIGHT, the ellipsoidal height (m),
 // _CHANGE, refined minus initial DSM height at the vertex (m; 0 where the initial DSM
-// had no data).
+// had no data), and where the refinement gave one, _CONFIDENCE (ConfidenceFromHeightSigma
+// at the images' GSD: 1 pinned by the images, 0 seen by none).
 std::vector<VertexScalar> ViewerScalars(const PointMesh& piece_dsm, const std::vector<Eigen::Vector3d>& geo,
-                                        const Dsm& initial) {
+                                        const Dsm& initial, double gsd_m) {
   VertexScalar height{"_HEIGHT", {}}, change{"_CHANGE", {}};
   height.values.reserve(geo.size());
   change.values.reserve(geo.size());
@@ -103,7 +105,17 @@ std::vector<VertexScalar> ViewerScalars(const PointMesh& piece_dsm, const std::v
     const float before = SampleDsm(initial, p.x(), p.y());
     change.values.push_back(std::isfinite(before) ? float(p.z() - before) : 0.f);
   }
-  return {height, change};
+  std::vector<VertexScalar> scalars{height, change};
+  if (piece_dsm.height_sigma.size() == geo.size() && gsd_m > 0) {
+    VertexScalar confidence{"_CONFIDENCE", {}};
+    confidence.values.reserve(geo.size());
+    for (float sigma : piece_dsm.height_sigma) {
+      const float c = ConfidenceFromHeightSigma(sigma, gsd_m);
+      confidence.values.push_back(std::isnan(c) ? 0.f : c);
+    }
+    scalars.push_back(std::move(confidence));
+  }
+  return scalars;
 }
 
 // Writes the trimmed piece: PLY in the output CRS, GLB in the tile's ENU frame (with
@@ -146,7 +158,7 @@ void WritePiece(const PointMesh& piece_dsm, const PlannedTile& tile, const JobPl
     const Eigen::Vector3d enu = ecef_from_enu.transpose() * (p - center_ecef);
     glb.vertices.emplace_back(float(enu.x()), float(enu.z()), float(-enu.y()));
   }
-  const std::vector<VertexScalar> scalars = ViewerScalars(piece_dsm, geo, initial);
+  const std::vector<VertexScalar> scalars = ViewerScalars(piece_dsm, geo, initial, r->refine.gsd_m);
   WriteAtomically(out_dir / TileGlbPath(tile), [&](const std::string& p) { WriteGlb(p, glb, scalars); });
   r->core_vertices = piece_dsm.points.size();
   r->core_faces = piece_dsm.faces.size();
@@ -180,6 +192,10 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
                   "tile index " + std::to_string(tile_index) + " out of range");
     const PlannedTile& tile = plan.tiles[tile_index];
     r.name = tile.Name();
+    r.estimated_peak_mb = tile.memory.peak_mb;
+    SATMESH_CHECK(tile.memory.peak_mb <= plan.memory_budget_mb || plan.memory_budget_mb <= 0,
+                  ErrorCode::kInvalidArgument,
+                  OverBudgetMessage("tile " + tile.Name(), tile.memory, plan.memory_budget_mb));
     auto t0 = Clock::now();
     TileInput input = PrepareTileInput(spec, plan, tile_index);
     r.view_names = input.view_names;
@@ -235,8 +251,10 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
     r.error_code = ErrorCode::kInternal;
     r.error = e.what();
   }
-  if (!r.ok) spdlog::warn("tile {} failed: {}", r.name, r.error);
   r.peak_rss_mb = PeakRssMb();
+  if (!r.ok) spdlog::warn("tile {} failed: {}", r.name, r.error);
+  else spdlog::info("tile {}: estimated peak {:.0f} MB, process peak so far {:.0f} MB", r.name,
+                    r.estimated_peak_mb, r.peak_rss_mb);
   return r;
 }
 

@@ -31,6 +31,7 @@ struct TileResult {
   std::array<double, 16> transform{};
   double image_mb = 0;              // image windows held while refining (full resolution)
   double peak_rss_mb = 0;           // process peak resident memory after the tile
+  double estimated_peak_mb = 0;     // the plan's estimate for the tile (memory_budget.h)
   std::vector<Eigen::Vector2d> view_bias_px;  // estimate_bias: shift added per view (col,
                                               // row; full-res px), in view_names order
   double prepare_s = 0, bias_s = 0, refine_s = 0, write_s = 0;

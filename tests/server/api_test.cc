@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "core/mesh/mesh_io.h"
+#include "core/tiling/memory_budget.h"
 #include "tests/server/test_server.h"
 
 namespace satmesh::server::testing {
@@ -182,6 +183,24 @@ TEST(Api, SubmitPollDownloadTilesAndResults) {
   EXPECT_EQ(tileset["root"]["children"].size(), 4u);
   const std::string uri = tileset["root"]["children"][0]["content"]["uri"];
   EXPECT_EQ(c.Get(("/jobs/" + id + "/results/" + uri).c_str())->status, 200);
+}
+
+TEST(Api, JobsGetTheServersMemoryBudgetUnlessTheyNameOne) {
+  TestServer s("budget");
+  s.options.memory_budget_mb = 3000;
+  s.Start();
+  auto c = s.Client();
+  json job = MakeStubJob(s.root);
+  ASSERT_EQ(c.Post("/processes/refine-mesh/execution", job.dump(), "application/json")->status, 201);
+  EXPECT_EQ(s.executor->last_memory_budget_mb(), 3000);
+  job["tiling"]["memory_budget_mb"] = 1500;
+  ASSERT_EQ(c.Post("/processes/refine-mesh/execution", job.dump(), "application/json")->status, 201);
+  EXPECT_EQ(s.executor->last_memory_budget_mb(), 1500);
+  TestServer d("budget_default", {}, /*workers=*/4);
+  d.Start();
+  auto cd = d.Client();
+  ASSERT_EQ(cd.Post("/processes/refine-mesh/execution", MakeStubJob(d.root).dump(), "application/json")->status, 201);
+  EXPECT_DOUBLE_EQ(d.executor->last_memory_budget_mb(), DefaultMemoryBudgetMb(4));
 }
 
 TEST(Api, ResultNotReadyWhileRunning) {

@@ -17,6 +17,7 @@ namespace fs = std::filesystem;
 
 ExecutionPlan StubExecutor::Plan(const JobSpec& spec) {
   ExecutionPlan plan;
+  last_memory_budget_mb_ = spec.tiling.memory_budget_mb;
   for (int y = 0; y < options_.tiles_y; ++y)
     for (int x = 0; x < options_.tiles_x; ++x) plan.tiles.push_back({x, y});
   plan.pixels = int64_t(spec.images.size()) * 1000;

@@ -34,10 +34,12 @@ class StubExecutor : public JobExecutor {
                           const std::vector<nlohmann::json>& tile_results,
                           const std::string& job_dir) override;
   int max_concurrent() const { return max_concurrent_; }
+  double last_memory_budget_mb() const { return last_memory_budget_mb_; }  // of the last Plan
 
  private:
   StubOptions options_;
   std::atomic<int> running_{0}, max_concurrent_{0};
+  std::atomic<double> last_memory_budget_mb_{-1};
 };
 
 // Writes two tiny files under root (a.tif, b.tif, dsm.tif; content irrelevant to the

@@ -1,6 +1,9 @@
 #include "core/refine/bias_estimation.h"
 
 #include <gtest/gtest.h>
+#include <omp.h>
+
+#include <algorithm>
 
 #include "core/common/error.h"
 #include "tests/core/refine/plane_scene.h"
@@ -51,6 +54,28 @@ TEST(EstimateViewBiases, RecoversInjectedBias) {
   ApplyViewBiases(e, &input);
   EXPECT_NEAR(input.views[1].rpc.bias().x(), 0.0, 0.05);
   EXPECT_NEAR(input.views[1].rpc.bias().y(), 0.0, 0.05);
+}
+
+TEST(EstimateViewBiases, ThreadsDoNotChangeTheEstimate) {
+  // The shifts of a search step are evaluated in parallel, one per thread: the estimate
+  // is the same as one thread's, bit for bit.
+  RefineInput input = PlaneInput();
+  input.views[1].rpc = input.views[1].rpc.WithBias({1.3, 0.6});
+  input.views[2].rpc = input.views[2].rpc.WithBias({-0.8, 0.4});
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const BiasEstimate one = EstimateViewBiases(input, kAllPairs);
+  omp_set_num_threads(std::max(2, threads));
+  const BiasEstimate many = EstimateViewBiases(input, kAllPairs);
+  omp_set_num_threads(threads);
+  for (int v = 0; v < 3; ++v) {
+    EXPECT_EQ(one.bias_col_row_px[v], many.bias_col_row_px[v]) << "view " << v;
+    EXPECT_EQ(one.zncc_after[v], many.zncc_after[v]) << "view " << v;
+  }
+  EXPECT_NEAR(many.bias_col_row_px[1].x(), -1.3, 0.05);
+  EXPECT_NEAR(many.bias_col_row_px[1].y(), -0.6, 0.05);
+  EXPECT_NEAR(many.bias_col_row_px[2].x(), 0.8, 0.05);
+  EXPECT_NEAR(many.bias_col_row_px[2].y(), -0.4, 0.05);
 }
 
 TEST(EstimateViewBiases, ReferenceViewIsHeldFixed) {

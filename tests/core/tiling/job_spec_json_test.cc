@@ -98,7 +98,7 @@ TEST(ResolveLevels, CoarseEdgeStaysUnderTheBound) {
 TEST(JobSpecFromJson, ReadsAoiAndTiling) {
   json job = MinimalJob();
   job["aoi"] = {{"bbox", {10, 20, 110, 220}}, {"crs", "EPSG:32617"}};
-  job["tiling"] = {{"size_m", 100}, {"overlap_m", 12.5}, {"workers", 3}};
+  job["tiling"] = {{"size_m", 100}, {"overlap_m", 12.5}, {"workers", 3}, {"memory_budget_mb", 4096}};
   JobSpec spec = proto::JobSpecFromJson(job, "/base");
   ASSERT_EQ(spec.aoi.polygon.size(), 4u);
   EXPECT_EQ(spec.aoi.polygon[2], Eigen::Vector2d(110, 220));
@@ -106,6 +106,7 @@ TEST(JobSpecFromJson, ReadsAoiAndTiling) {
   EXPECT_EQ(spec.tiling.tile_size_m, 100);
   EXPECT_EQ(spec.tiling.overlap_m, 12.5);
   EXPECT_EQ(spec.tiling.workers, 3);
+  EXPECT_EQ(spec.tiling.memory_budget_mb, 4096);
   job["aoi"] = {{"polygon", {{0, 0}, {5, 0}, {0, 5}}}};
   spec = proto::JobSpecFromJson(job, "/base");
   EXPECT_EQ(spec.aoi.polygon.size(), 3u);
@@ -116,6 +117,8 @@ TEST(JobSpecFromJson, BadTilingFieldsAreNamed) {
   json job = MinimalJob();
   job["tiling"] = {{"workers", 0}};
   EXPECT_NE(ErrorOf(job).find("tiling.workers"), std::string::npos) << ErrorOf(job);
+  job["tiling"] = {{"memory_budget_mb", -1}};
+  EXPECT_NE(ErrorOf(job).find("tiling.memory_budget_mb"), std::string::npos) << ErrorOf(job);
   job["tiling"] = {{"size", 10}};
   EXPECT_NE(ErrorOf(job).find("tiling.size: unknown field"), std::string::npos) << ErrorOf(job);
   job = MinimalJob();

@@ -14,6 +14,7 @@
 #include "core/mesh/mesh_io.h"
 #include "core/synth/scene_writer.h"
 #include "core/tiling/job.h"
+#include "core/tiling/memory_budget.h"
 #include "proto/job_spec_json.h"
 #include "tests/scratch_dir.h"
 
@@ -189,6 +190,89 @@ TEST_F(TiledJob, AFailingTileIsReportedAndTheOthersFinish) {
   EXPECT_EQ(again.tileset.region, o.assembly.tileset.region);
   EXPECT_EQ(again.tiles_failed, 2);
   EXPECT_TRUE(o.assembly.seams.size() == 1u);  // 0_0 | 0_1 only
+}
+
+TEST_F(TiledJob, BiasesAreEstimatedOnceForTheJob) {
+  JobSpec spec = Spec();
+  spec.refine.estimate_bias = true;  // the scene has none: the estimates stay small
+  spec.refine.iterations_per_level = 1;
+  const JobOutputs o = RunJob(spec, OutDir("job_bias"));
+  EXPECT_EQ(o.assembly.tiles_ok, 4);
+  EXPECT_FALSE(o.bias_tile.empty());
+  ASSERT_EQ(o.job_bias_px.size(), 3u);
+  for (const auto& b : o.job_bias_px) EXPECT_LT(b.norm(), 0.2) << b.transpose();
+  EXPECT_GT(o.bias_s, 0);
+  for (const auto& t : o.tiles) {
+    EXPECT_EQ(t.bias_s, 0) << t.name << ": estimated once for the job, not per tile";
+    ASSERT_EQ(t.view_bias_px.size(), t.view_names.size()) << t.name;
+    for (size_t v = 0; v < t.view_names.size(); ++v)
+      for (size_t i = 0; i < spec.images.size(); ++i)
+        if (spec.images[i].path == t.view_names[v])
+          EXPECT_EQ(t.view_bias_px[v], o.job_bias_px[i]) << t.name << " view " << v;
+  }
+}
+
+TEST_F(TiledJob, WhenTheBiasTileHasNoSurfaceEachTileEstimatesItsOwn) {
+  // The west half of the initial DSM as nodata: tile 0_0, where the job's biases would be
+  // estimated, has no surface.
+  Dsm initial = ReadDsm(scene_ + "/initial/dsm.tif");
+  for (int j = 0; j < initial.height; ++j)
+    for (int i = 0; i < initial.width / 2 + 10; ++i) initial.at(i, j) = NAN;
+  const std::string out = OutDir("bias_fallback");
+  fs::create_directories(out);
+  JobSpec spec = Spec();
+  spec.initial_dsm = out + "/half.tif";
+  WriteDsm(spec.initial_dsm, initial);
+  spec.refine.estimate_bias = true;
+  spec.refine.iterations_per_level = 1;
+  const JobOutputs o = RunJob(spec, out);
+  EXPECT_TRUE(o.job_bias_px.empty());
+  EXPECT_EQ(o.assembly.tiles_ok, 2);
+  for (const auto& t : o.tiles)
+    if (t.ok) EXPECT_EQ(t.view_bias_px.size(), t.view_names.size()) << t.name << ": its own";
+}
+
+TEST_F(TiledJob, ATinyBudgetIsRefusedNamingBudgetAndNeed) {
+  JobSpec spec = Spec();
+  spec.tiling = TilingOptions{};
+  spec.tiling.memory_budget_mb = 1;
+  try {
+    RunJob(spec, OutDir("tiny_budget"));
+    FAIL() << "a 1 MB budget was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    const std::string message = e.what();
+    EXPECT_NE(message.find("needs an estimated"), std::string::npos) << message;
+    EXPECT_NE(message.find("memory budget is 1 MB"), std::string::npos) << message;
+    EXPECT_NE(message.find("3 views"), std::string::npos) << message;
+  }
+}
+
+TEST_F(TiledJob, AJobOverTheBudgetIsTiledToFitIt) {
+  JobSpec spec = Spec();
+  spec.tiling = TilingOptions{};
+  spec.tiling.overlap_m = 3;
+  const JobPlan whole = PlanJob(spec);
+  ASSERT_EQ(whole.tiles.size(), 1u);
+  EXPECT_EQ(whole.tiles[0].memory.views, 3);
+  EXPECT_GT(whole.tiles[0].memory.window_px, 100.0 * 100.0);
+  // A budget of half the one piece's need over the fixed part.
+  spec.tiling.memory_budget_mb = kBaseMb + 0.5 * (whole.tiles[0].memory.peak_mb - kBaseMb);
+  const JobPlan tiled = PlanJob(spec);
+  EXPECT_TRUE(tiled.auto_tiled);
+  EXPECT_GT(tiled.tiles.size(), 1u);
+  for (const PlannedTile& t : tiled.tiles) EXPECT_LE(t.memory.peak_mb, spec.tiling.memory_budget_mb);
+}
+
+TEST_F(TiledJob, AGivenTileOverTheBudgetFailsNamingIt) {
+  JobSpec spec = Spec();
+  spec.tiling.memory_budget_mb = 1;
+  const JobPlan plan = PlanJob(spec);  // the tiling is the job's: not changed
+  ASSERT_EQ(plan.tiles.size(), 4u);
+  const TileResult r = RunTile(spec, plan, 0, OutDir("given_over_budget"));
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.error.find("tile 0_0 needs an estimated"), std::string::npos) << r.error;
+  EXPECT_GT(r.estimated_peak_mb, 1);
 }
 
 TEST_F(TiledJob, OneTileJobMatchesTheWholeDsm) {

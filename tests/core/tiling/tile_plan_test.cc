@@ -6,6 +6,7 @@
 #include "core/common/error.h"
 #include "core/geo/crs.h"
 #include "core/tiling/tile_plan.h"
+#include "core/tiling/memory_budget.h"
 #include "tests/scratch_dir.h"
 
 namespace satmesh {
@@ -41,6 +42,32 @@ TEST(TilingOptions, DefaultsAreValidAndBadValuesNamed) {
   o = {};
   o.overlap_m = -1;
   EXPECT_NE(o.Check().find("tiling.overlap_m"), std::string::npos);
+  o = {};
+  o.memory_budget_mb = -5;
+  EXPECT_NE(o.Check().find("tiling.memory_budget_mb"), std::string::npos);
+}
+
+TEST(MemoryBudget, DefaultIsAQuarterOfTheMachineSharedByTheWorkers) {
+  const double one = DefaultMemoryBudgetMb(1);
+  EXPECT_GT(one, 100);  // any machine that runs the tests has 400 MB
+  EXPECT_DOUBLE_EQ(DefaultMemoryBudgetMb(4), one / 4);
+  TilingOptions o;
+  EXPECT_DOUBLE_EQ(MemoryBudgetMb(o), one);
+  o.memory_budget_mb = 1234;
+  EXPECT_DOUBLE_EQ(MemoryBudgetMb(o), 1234);
+}
+
+TEST(PlanJob, EstimatesEachTilesMemoryFromItsCells) {
+  // No readable image: the estimate is the fixed part and the DSM cells' meshes.
+  JobSpec spec = Spec(WriteTestDsm("estimate"));
+  spec.tiling.tile_size_m = 20;
+  const JobPlan plan = PlanJob(spec);
+  ASSERT_EQ(plan.tiles.size(), 6u);
+  for (const PlannedTile& t : plan.tiles) {
+    EXPECT_EQ(t.memory.views, 0);
+    EXPECT_DOUBLE_EQ(t.memory.dsm_cells, double(t.padded_cells.width) * t.padded_cells.height);
+    EXPECT_NEAR(t.memory.peak_mb, kBaseMb + kBytesPerDsmCell * t.memory.dsm_cells / (1 << 20), 1e-9);
+  }
 }
 
 TEST(PlanJob, DefaultIsOneTileOverTheDsm) {
