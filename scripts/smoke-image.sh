@@ -37,6 +37,10 @@ chown 10001 "$work/data" "$work/inputs"  # the image's non-root user
 srv="" cli="" server_pid=""
 
 fail() { echo "smoke-image: FAIL: $*" >&2; [ -f "$work/server.log" ] && tail -20 "$work/server.log" >&2; exit 1; }
+# body_has URL PATTERN: GET URL succeeds and its body contains PATTERN. The body is read
+# whole first: `curl | grep -q` fails under pipefail when grep leaves before curl has
+# written everything (curl: (23) Failed writing body; CI, the viewer page).
+body_has() { local body; body=$(curl -fsS "$1") && grep -qF -- "$2" <<<"$body"; }
 
 # `buildah run` does not take its container's processes with it when killed: they live
 # on as orphans, and the server keeps the port. So the server runs in a process group of
@@ -113,7 +117,7 @@ for _ in $(seq 100); do
 done
 health=$(curl -fsS "$url/health") || fail "GET /health"
 echo "smoke-image: GET /health -> $health"
-curl -fsS "$url/processes" | grep -q '"refine-mesh"' || fail "GET /processes does not list refine-mesh"
+body_has "$url/processes" '"refine-mesh"' || fail "GET /processes does not list refine-mesh"
 echo "smoke-image: GET /processes lists refine-mesh"
 
 if [ "$job" -eq 1 ]; then
@@ -134,10 +138,10 @@ if [ "$job" -eq 1 ]; then
     || fail "the server did not write its data as uid 10001"
   echo "smoke-image: results: $(ls "$work/inputs/result" | tr '\n' ' ')"
   # The job viewer: its page, the CesiumJS the image carries, the live tileset.
-  curl -fsS "$url/jobs/$id/viewer" | grep -q 'Cesium.js' || fail "GET /jobs/$id/viewer"
+  body_has "$url/jobs/$id/viewer" 'Cesium.js' || fail "GET /jobs/$id/viewer"
   cesium_bytes=$(curl -fsS "$url/viewer/Cesium/Cesium.js" | wc -c) || fail "GET /viewer/Cesium/Cesium.js"
   [ "$cesium_bytes" -gt 1000000 ] || fail "/viewer/Cesium/Cesium.js has $cesium_bytes bytes"
-  curl -fsS "$url/jobs/$id/tileset.json" | grep -q '"tiles_done"' || fail "GET /jobs/$id/tileset.json"
+  body_has "$url/jobs/$id/tileset.json" '"tiles_done"' || fail "GET /jobs/$id/tileset.json"
   echo "smoke-image: viewer page, CesiumJS ($cesium_bytes bytes) and live tileset served"
 fi
 
