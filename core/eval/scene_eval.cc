@@ -9,6 +9,7 @@
 
 #include "core/common/error.h"
 #include "core/dsm/dsm.h"
+#include "core/eval/stats.h"
 #include "core/eval/surface_distance.h"
 #include "core/mesh/mesh_io.h"
 
@@ -25,13 +26,6 @@ void RequireFile(const std::string& path, const std::string& what) {
 std::string ResultMeshPath(const std::string& result_path) {
   if (fs::is_directory(result_path)) return (fs::path(result_path) / "mesh.ply").string();
   return result_path;
-}
-
-double Quantile(std::vector<float> v, double q) {
-  if (v.empty()) return 0;
-  auto it = v.begin() + long(q * double(v.size() - 1));
-  std::nth_element(v.begin(), it, v.end());
-  return *it;
 }
 
 }  // namespace
@@ -61,7 +55,7 @@ std::vector<SigmaBin> ErrorBySigma(const TriangleMesh& result, const TriangleMes
     bin.sigma_min_m = sigma[order[begin]];
     bin.sigma_max_m = sigma[order[end - 1]];
     bin.vertices = end - begin;
-    std::vector<float> e;
+    std::vector<double> e;
     for (size_t k = begin; k < end; ++k) e.push_back(error[order[k]]);
     bin.median_error_m = Quantile(e, 0.5);
     bin.p90_error_m = Quantile(e, 0.9);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace satmesh {
 
@@ -35,6 +36,16 @@ double HeightConfidence(double relative_information, const RefineOptions& option
 // thin-plate weight is divided by it, so where the images constrain a vertex weakly (no
 // texture, shadow, one narrow pair, occlusion) the surface stays smooth and near where it
 // started instead of following matching noise. Also fills the level's quantiles of σ.
+std::vector<float> HeightSigmaFromInformation(const std::vector<double>& information,
+                                              double noise_variance) {
+  const double variance = std::max(noise_variance, 1e-12);
+  std::vector<float> sigma(information.size());
+  for (size_t v = 0; v < information.size(); ++v)
+    sigma[v] = information[v] > 0 ? float(std::sqrt(variance / information[v]))
+                                  : std::numeric_limits<float>::infinity();
+  return sigma;
+}
+
 std::vector<float> HeightConfidenceFromInformation(const std::vector<double>& information,
                                                    double noise_variance, double gsd_m,
                                                    const RefineOptions& options,
@@ -42,13 +53,11 @@ std::vector<float> HeightConfidenceFromInformation(const std::vector<double>& in
   const double target = options.height_sigma_gsd * gsd_m;
   const double scale = target * target / std::max(noise_variance, 1e-12);
   std::vector<float> confidence(information.size());
-  std::vector<float> sigma_gsd;
-  sigma_gsd.reserve(information.size());
-  for (size_t v = 0; v < information.size(); ++v) {
+  for (size_t v = 0; v < information.size(); ++v)
     confidence[v] = float(std::clamp(information[v] * scale, options.min_height_confidence, 1.0));
-    if (information[v] > 0)
-      sigma_gsd.push_back(float(std::sqrt(noise_variance / information[v]) / gsd_m));
-  }
+  std::vector<float> sigma_gsd;  // of the vertices some pixel saw
+  for (const float sigma : HeightSigmaFromInformation(information, noise_variance))
+    if (std::isfinite(sigma)) sigma_gsd.push_back(float(sigma / gsd_m));
   if (!sigma_gsd.empty()) {
     auto quantile = [&](double q) {
       auto it = sigma_gsd.begin() + long(q * double(sigma_gsd.size() - 1));

@@ -24,6 +24,11 @@ double HeightConfidence(double relative_information, const RefineOptions& option
 double MeanRelativePairInformation(const std::vector<StereoPair>& pairs,
                                    const RefineOptions& options);
 
+// Per vertex, sqrt(noise_variance / information) in metres: how well the images determine
+// its position along the normal (1 sigma under their noise); +inf where no pixel saw it.
+std::vector<float> HeightSigmaFromInformation(const std::vector<double>& information,
+                                              double noise_variance);
+
 // From the images (height_sigma_gsd > 0): `information` per vertex is the Fisher
 // information Σ w_k² (∂b/∂n)² of the pixels that see it (GradientAccumulator::
 // AddInformation), so its height is known to sigma = sqrt(noise_variance / I).

@@ -66,7 +66,6 @@ struct LevelContext {
   std::vector<std::pair<int, int>>& pairs;
   double mean_pair_information;  // MeanRelativePairInformation of the selected pairs
   double gsd_m;
-  std::vector<double> noise_variance;  // per level: MeanNoiseVariance
 };
 
 // One thread's buffers of the photometric pass, kept across iterations: they are tens
@@ -179,8 +178,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   std::vector<int> slot;
   std::vector<ViewLevel> views = MakeViewLevels(ctx.input, ctx.sources, ctx.pairs, *mesh, level,
                                                 opt.virtual_camera_grid_px, &slot);
-  const PhotometricOptions photo =
-      PhotometricOptionsAt(opt, gsd, MeanNoiseVariance(ctx.sources, level));
+  const double noise_variance = MeanNoiseVariance(ctx.sources, level);
+  const PhotometricOptions photo = PhotometricOptionsAt(opt, gsd, noise_variance);
 
   std::optional<RayScene> scene;  // Embree, unless the hit maps are rasterized
   if (!opt.rasterize_hit_maps) scene.emplace(*mesh);
@@ -228,21 +227,13 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
                                             ? &information
                                             : nullptr);
     if (it == 0 && data_confidence)
-      confidence = HeightConfidenceFromInformation(information, ctx.noise_variance[level], gsd,
-                                                   opt, &stats);
+      confidence = HeightConfidenceFromInformation(information, noise_variance, gsd, opt, &stats);
     stats.mean_zncc.push_back(zncc);
     stats.times.gradient_s += Seconds(t0);
     if (it == 0 && zncc < abandon_below) return false;
     if (last) {
       // The finished surface's height sigma from the images (+inf: no image sees it).
-      if (level == 0) {
-        const double noise_variance = std::max(ctx.noise_variance[0], 1e-12);
-        stats_out->vertex_height_sigma_m.resize(nv);
-        for (size_t v = 0; v < nv; ++v)
-          stats_out->vertex_height_sigma_m[v] =
-              information[v] > 0 ? float(std::sqrt(noise_variance / information[v]))
-                                 : std::numeric_limits<float>::infinity();
-      }
+      if (level == 0) mesh->height_sigma = HeightSigmaFromInformation(information, noise_variance);
       break;
     }
 
@@ -354,16 +345,13 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   RefineResult* result) {
   TriangleMesh mesh =
       RemeshForLevel(input.initial_mesh, options, result->gsd_m, options.levels, progress);
-  LevelContext ctx{input,
+  const LevelContext ctx{input,
                          options,
                          progress,
                          views,
                          result->pairs,
                          MeanRelativePairInformation(result->pair_details, options),
-                         result->gsd_m,
-                         {}};
-  for (int level = 0; level <= options.levels; ++level)
-    ctx.noise_variance.push_back(MeanNoiseVariance(views, level));
+                         result->gsd_m};
   bool check_initial = options.restart_from_initial;
   for (int level = options.levels; level >= 0; --level) {
     const auto level_start = Clock::now();
@@ -401,7 +389,6 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
     stats.restarted = restarted;
     stats.initial_check_s = check_s;
     stats.level_s = Seconds(level_start);
-    if (level == 0) mesh.height_sigma = std::move(stats.vertex_height_sigma_m);
     result->levels.push_back(std::move(stats));
   }
   result->mesh = std::move(mesh);

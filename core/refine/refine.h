@@ -56,7 +56,6 @@ struct LevelStats {
   // 10/50/90% quantiles of the vertices' height sigma from the images, in level GSD
   // (refine.cc, HeightConfidenceFromInformation); empty: not measured.
   std::vector<double> height_sigma_gsd_q;
-  std::vector<float> vertex_height_sigma_m;  // level 0 until CoarseToFine moves it to the result
   StageTimes times;
   double level_s = 0;                  // all of the level, initial_check_s included
 };

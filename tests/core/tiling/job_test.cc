@@ -207,8 +207,9 @@ TEST_F(TiledJob, BiasesAreEstimatedOnceForTheJob) {
     ASSERT_EQ(t.view_bias_px.size(), t.view_names.size()) << t.name;
     for (size_t v = 0; v < t.view_names.size(); ++v)
       for (size_t i = 0; i < spec.images.size(); ++i)
-        if (spec.images[i].path == t.view_names[v])
+        if (spec.images[i].path == t.view_names[v]) {
           EXPECT_EQ(t.view_bias_px[v], o.job_bias_px[i]) << t.name << " view " << v;
+        }
   }
 }
 
@@ -229,7 +230,9 @@ TEST_F(TiledJob, WhenTheBiasTileHasNoSurfaceEachTileEstimatesItsOwn) {
   EXPECT_TRUE(o.job_bias_px.empty());
   EXPECT_EQ(o.assembly.tiles_ok, 2);
   for (const auto& t : o.tiles)
-    if (t.ok) EXPECT_EQ(t.view_bias_px.size(), t.view_names.size()) << t.name << ": its own";
+    if (t.ok) {
+      EXPECT_EQ(t.view_bias_px.size(), t.view_names.size()) << t.name << ": its own";
+    }
 }
 
 TEST_F(TiledJob, ATinyBudgetIsRefusedNamingBudgetAndNeed) {
