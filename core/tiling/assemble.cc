@@ -74,7 +74,7 @@ void AppendPiece(const TriangleMesh& piece, TriangleMesh* mesh) {
   if (mesh->vertices.empty()) mesh->origin = piece.origin, mesh->crs = piece.crs;
   const Eigen::Vector3f shift = (piece.origin - mesh->origin).cast<float>();
   const int base = int(mesh->vertices.size());
-  // height_sigma: kept where every piece has it (NaN-padded while pieces disagree).
+  // height_sigma: kept only while every piece has it (dropped as soon as one lacks it).
   const bool had_sigma = mesh->height_sigma.size() == size_t(base) && base > 0;
   const bool has_sigma = piece.height_sigma.size() == piece.vertices.size();
   if (base == 0 && has_sigma) mesh->height_sigma = piece.height_sigma;
