@@ -353,7 +353,38 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
                  view, input.views[view].name, best_neighbours.size(), d.x(), d.y(),
                  out.zncc_before[view], out.zncc_after[view]);
   }
+  if (options.minimum_norm_datum) {
+    // The input's RPCs (before this estimate) give the Jacobians; the bias barely changes them.
+    std::vector<RpcModel> rpcs;
+    for (const auto& v : views) rpcs.push_back(v.rpc);
+    const Eigen::Vector2d t = MinimumNormDatum(rpcs, input.frame, 0.5 * (pb.box_min + pb.box_max), &out);
+    spdlog::info("bias: datum of minimum corrections: the block shifted by ({:+.3f}, {:+.3f}) m "
+                 "(east, north) from the reference view's", t.x(), t.y());
+  }
   return out;
+}
+
+Eigen::Vector2d MinimumNormDatum(const std::vector<RpcModel>& rpcs, const LocalFrame& frame,
+                                 const Eigen::Vector3d& center, BiasEstimate* estimate) {
+  const Eigen::Vector3d geo = frame.GeoFromLocal(center);
+  const Eigen::Vector3d scale = frame.GeoFromLocalScale();
+  std::vector<Eigen::Matrix2d> jacobians(rpcs.size(), Eigen::Matrix2d::Zero());
+  Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+  for (size_t v = 0; v < rpcs.size(); ++v) {
+    if (!estimate->solved[v]) continue;
+    Eigen::Matrix<double, 2, 3> j_geo;
+    rpcs[v].PixelFromGeo(geo, &j_geo);
+    jacobians[v] = j_geo.leftCols<2>() * scale.head<2>().asDiagonal();  // px per metre
+    normal += jacobians[v].transpose() * jacobians[v];
+    rhs += jacobians[v].transpose() * estimate->bias_col_row_px[v];
+  }
+  if (!(std::abs(normal.determinant()) > 1e-12)) return Eigen::Vector2d::Zero();
+  const Eigen::Vector2d t = -normal.inverse() * rhs;
+  for (size_t v = 0; v < rpcs.size(); ++v)
+    if (estimate->solved[v]) estimate->bias_col_row_px[v] += jacobians[v] * t;
+  estimate->datum_shift_m = t;
+  return t;
 }
 
 void ApplyViewBiases(const BiasEstimate& estimate, RefineInput* input) {

@@ -4,7 +4,11 @@
 // order over the pair graph, gets the 2D shift that maximises the mean ZNCC of the views
 // already solved warped into it through the INITIAL surface (which stays fixed): a grid
 // search at a coarse pyramid level, then quadratic fits on 3x3 grids down to full
-// resolution. Biases are relative to the reference view (a common shift is not observable).
+// resolution. The pairs observe the biases only relative to each other: a common ground
+// shift of the block is not observable from the images. Once every view is solved, that
+// shift is fixed by MinimumNormDatum (the biases' a priori weights of an RPC block
+// adjustment without control: the corrections as small as possible), not by the
+// reference view alone.
 #include <Eigen/Core>
 #include <string>
 #include <utility>
@@ -24,6 +28,9 @@ struct BiasOptions {
   double final_step_px = 0.125;    // smallest 3x3 spacing at full resolution, full-res px, > 0
   int max_neighbours = 3;          // solved views a view is matched against (first in the
                                    // pair order: Refine gives them best score first), >= 1
+  bool minimum_norm_datum = true;  // the block's common horizontal shift chosen so that the
+                                   // corrections are smallest (MinimumNormDatum); false:
+                                   // the reference view's RPC is the datum (correction 0)
   double solved_cache_mb = 1024;   // solved views' level data (rays, surface points) kept
                                    // for the views matched against them later, MB, >= 0
   RefineOptions refine;            // ZNCC window, visibility, virtual cameras (as the refinement)
@@ -36,7 +43,19 @@ struct BiasEstimate {
   std::vector<bool> solved;                      // false: no pair with a solved view (bias 0)
   std::vector<double> zncc_before, zncc_after;   // per view: mean ZNCC with solved views, level 0
   std::vector<std::pair<int, int>> pairs;        // the pairs it was estimated over
+  Eigen::Vector2d datum_shift_m{0, 0};           // ground shift (east, north) MinimumNormDatum
+                                                 // applied to every solved view's correction
 };
+
+// The datum of a relative bias estimate. Shifting the whole block by a horizontal ground
+// vector t changes each view's correction by J_v t (J_v: d(col,row)/d(east,north) of
+// view v at `center`, a point of the local frame) and leaves every pair's agreement
+// unchanged, so the images cannot tell. Vendor RPC biases are independent with zero mean,
+// so the most probable datum makes the corrections smallest: t minimises
+// sum over solved views of |c_v + J_v t|^2 (equal a priori weights; Grodecki & Dial 2003).
+// Adds J_v t to each solved view's correction; returns t (metres).
+Eigen::Vector2d MinimumNormDatum(const std::vector<RpcModel>& rpcs, const LocalFrame& frame,
+                                 const Eigen::Vector3d& center, BiasEstimate* estimate);
 
 // Throws Error{kInvalidArgument} if options.Check() fails or a pair index is out of
 // range, Error{kInvalidInput} for an empty initial mesh, Error{kCancelled} (checked per
