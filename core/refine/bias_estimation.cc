@@ -357,15 +357,15 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
     // The input's RPCs (before this estimate) give the Jacobians; the bias barely changes them.
     std::vector<RpcModel> rpcs;
     for (const auto& v : views) rpcs.push_back(v.rpc);
-    const Eigen::Vector2d t = MinimumNormDatum(rpcs, input.frame, 0.5 * (pb.box_min + pb.box_max), &out);
+    MinimumNormDatum(rpcs, input.frame, 0.5 * (pb.box_min + pb.box_max), &out);
     spdlog::info("bias: datum of minimum corrections: the block shifted by ({:+.3f}, {:+.3f}) m "
-                 "(east, north) from the reference view's", t.x(), t.y());
+                 "(east, north) from the reference view's", out.datum_shift_m.x(), out.datum_shift_m.y());
   }
   return out;
 }
 
-Eigen::Vector2d MinimumNormDatum(const std::vector<RpcModel>& rpcs, const LocalFrame& frame,
-                                 const Eigen::Vector3d& center, BiasEstimate* estimate) {
+void MinimumNormDatum(const std::vector<RpcModel>& rpcs, const LocalFrame& frame,
+                      const Eigen::Vector3d& center, BiasEstimate* estimate) {
   const Eigen::Vector3d geo = frame.GeoFromLocal(center);
   const Eigen::Vector3d scale = frame.GeoFromLocalScale();
   std::vector<Eigen::Matrix2d> jacobians(rpcs.size(), Eigen::Matrix2d::Zero());
@@ -379,12 +379,11 @@ Eigen::Vector2d MinimumNormDatum(const std::vector<RpcModel>& rpcs, const LocalF
     normal += jacobians[v].transpose() * jacobians[v];
     rhs += jacobians[v].transpose() * estimate->bias_col_row_px[v];
   }
-  if (!(std::abs(normal.determinant()) > 1e-12)) return Eigen::Vector2d::Zero();
+  if (!(std::abs(normal.determinant()) > 1e-12)) return;
   const Eigen::Vector2d t = -normal.inverse() * rhs;
   for (size_t v = 0; v < rpcs.size(); ++v)
     if (estimate->solved[v]) estimate->bias_col_row_px[v] += jacobians[v] * t;
   estimate->datum_shift_m = t;
-  return t;
 }
 
 void ApplyViewBiases(const BiasEstimate& estimate, RefineInput* input) {

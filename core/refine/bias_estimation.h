@@ -53,8 +53,8 @@ struct BiasEstimate {
 // unchanged, so the images cannot tell. Vendor RPC biases are independent with zero mean,
 // so the most probable datum makes the corrections smallest: t minimises
 // sum over solved views of |c_v + J_v t|^2 (equal a priori weights; Grodecki & Dial 2003).
-// Adds J_v t to each solved view's correction; returns t (metres).
-Eigen::Vector2d MinimumNormDatum(const std::vector<RpcModel>& rpcs, const LocalFrame& frame,
+// Adds J_v t to each solved view's correction and records t in estimate->datum_shift_m.
+void MinimumNormDatum(const std::vector<RpcModel>& rpcs, const LocalFrame& frame,
                                  const Eigen::Vector3d& center, BiasEstimate* estimate);
 
 // Throws Error{kInvalidArgument} if options.Check() fails or a pair index is out of
