@@ -163,6 +163,8 @@ struct ApiServer::Impl {
       job = json(job["job"]);
       if (!job.is_object()) throw HttpError(400, "bad-request", "inputs.job: must be an object (the job)");
     }
+    if (job.is_object() && job.contains("images") && job["images"].is_array())
+      CheckImageCount(job["images"].size(), options.inputs);
     ResolveHrefs(&job, options.inputs);
     // The server's budget per worker, unless the job names its own (kept in the record).
     if (job.is_object() && (!job.contains("tiling") || job["tiling"].is_object()) &&

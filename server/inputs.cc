@@ -1,5 +1,6 @@
 #include "server/inputs.h"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "core/common/error.h"
@@ -85,11 +86,15 @@ void ResolveHrefs(nlohmann::json* job, const InputPolicy& policy) {
   }
 }
 
-void CheckLimits(const JobSpec& spec, const ExecutionPlan& plan, const InputPolicy& policy) {
-  if (int(spec.images.size()) > policy.max_images)
-    ThrowError(ErrorCode::kInvalidArgument, "images: " + std::to_string(spec.images.size()) +
+void CheckImageCount(size_t images, const InputPolicy& policy) {
+  if (images > size_t(std::max(0, policy.max_images)))
+    ThrowError(ErrorCode::kInvalidArgument, "images: " + std::to_string(images) +
                                                 " images exceed this server's limit of " +
                                                 std::to_string(policy.max_images));
+}
+
+void CheckLimits(const JobSpec& spec, const ExecutionPlan& plan, const InputPolicy& policy) {
+  CheckImageCount(spec.images.size(), policy);
   if (int(plan.tiles.size()) > policy.max_tiles)
     ThrowError(ErrorCode::kInvalidArgument, "job: " + std::to_string(plan.tiles.size()) +
                                                 " tiles exceed this server's limit of " +

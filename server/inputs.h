@@ -26,6 +26,10 @@ struct InputPolicy {
 // the wrong shape are left for the job parser to name.
 void ResolveHrefs(nlohmann::json* job, const InputPolicy& policy);
 
+// Throws Error{kInvalidArgument} when `images` exceed policy.max_images: checked on the
+// request before any href is looked up (a job of 500 images costs no file access).
+void CheckImageCount(size_t images, const InputPolicy& policy);
+
 // Throws Error{kInvalidArgument} naming the limit a planned job exceeds.
 void CheckLimits(const JobSpec& spec, const ExecutionPlan& plan, const InputPolicy& policy);
 

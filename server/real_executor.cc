@@ -9,6 +9,7 @@
 #include "core/common/error.h"
 #include "core/image/image_io.h"
 #include "core/mesh/mesh_io.h"
+#include "core/tiling/input_check.h"
 #include "core/tiling/job.h"
 #include "proto/job_pictures.h"
 #include "proto/job_spec_json.h"
@@ -82,7 +83,9 @@ ExecutionPlan RealExecutor::Plan(const JobSpec& spec) {
     plan.pixels += int64_t(info.width) * info.height;
   }
   InfoFor(spec.initial_dsm, "initial.dsm");
-  for (const PlannedTile& tile : PlanJob(spec).tiles) plan.tiles.push_back({tile.x, tile.y});
+  const JobPlan job_plan = PlanJob(spec);
+  CheckJobInputs(spec, job_plan);  // bad data refused at submission, named (422)
+  for (const PlannedTile& tile : job_plan.tiles) plan.tiles.push_back({tile.x, tile.y});
   return plan;
 }
 

@@ -194,7 +194,10 @@ JobPlan PlanJob(const JobSpec& spec) {
   plan.dsm = ReadDsmGrid(spec.initial_dsm);
   SATMESH_CHECK(!plan.dsm.crs_wkt.empty() && !CrsIsGeographic(plan.dsm.crs_wkt),
                 ErrorCode::kInvalidInput,
-                "initial DSM '" + spec.initial_dsm + "': tiling needs a projected CRS (metres)");
+                "initial.dsm: '" + spec.initial_dsm + "' is " +
+                    (plan.dsm.crs_wkt.empty() ? std::string("without a CRS")
+                                              : "in a geographic CRS (degrees)") +
+                    "; satmesh needs a projected CRS in metres (e.g. UTM: gdalwarp -t_srs EPSG:326zz)");
   CheckCrs("outputs.crs", spec.output_crs, plan.dsm.crs_wkt);
   CheckCrs("aoi.crs", spec.aoi.crs, plan.dsm.crs_wkt);
   plan.output_crs = spec.output_crs.empty() ? plan.dsm.crs_wkt : spec.output_crs;

@@ -70,6 +70,9 @@ std::vector<Case> Cases(const std::string& job_id) {
       {"POST", exec, With([](json& j) { j["images"][0]["href"] = "/vsis3/bucket/a.tif"; }), 403, "images[0].href"},
       {"POST", exec, With([](json& j) { j["images"][0]["href"] = "sub"; }), 400, "images[0].href"},
       {"POST", exec, With([](json& j) { for (int i = 0; i < 8; ++i) j["images"].push_back({{"href", "a.tif"}}); }), 400, "limit of 8"},
+      {"POST", exec, With([](json& j) {  // 500 images: refused before any href is looked up
+         for (int i = 2; i < 500; ++i) j["images"].push_back({{"href", "missing_" + std::to_string(i) + ".tif"}});
+       }), 400, "images: 500 images exceed this server's limit of 8"},
       {"POST", exec, std::string(2 << 20, ' '), 413, ""},
       {"POST", exec, Job().dump(), 415, "Content-Type", "text/plain"},
       {"POST", "/processes/nope/execution", Job().dump(), 404, "nope"},
