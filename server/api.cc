@@ -372,6 +372,12 @@ struct ApiServer::Impl {
       return httplib::Server::HandlerResponse::Handled;
     }));
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+      // httplib decodes %00 into the path; a file name would end there ("Cesium.js%00.html"
+      // would serve Cesium.js as text/html). No route has a NUL: refused before any.
+      if (req.path.find('\0') != std::string::npos) {
+        SendProblem(res, ProblemForStatus(400, "the request path contains a NUL byte (%00)"));
+        return httplib::Server::HandlerResponse::Handled;
+      }
       if (AnswerCorsAndMethods(req, res)) return httplib::Server::HandlerResponse::Handled;
       if (options.token.empty() || IsPublicPage(req.path)) return httplib::Server::HandlerResponse::Unhandled;
       const std::string auth = req.get_header_value("Authorization");

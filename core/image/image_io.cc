@@ -56,6 +56,13 @@ RasterInfo ReadRasterInfo(const std::string& path) {
   return info;
 }
 
+std::string RasterDriverName(const std::string& path) {
+  EnsureGdalInitialized();
+  CPLErrorReset();
+  GDALDriverH driver = GDALIdentifyDriverEx(path.c_str(), GDAL_OF_RASTER, nullptr, nullptr);
+  return driver ? GDALGetDriverShortName(driver) : "";
+}
+
 AcquisitionInfo ReadAcquisitionInfo(const std::string& path) {
   DatasetPtr ds = OpenRaster(path);
   MetadataList items;

@@ -91,6 +91,15 @@ std::vector<Case> Cases(const std::string& job_id) {
       {"GET", "/jobs/" + job_id + "/results/job.json", "", 404, ""},
       {"GET", "/jobs/" + job_id + "/results/state.json", "", 404, ""},
       {"GET", "/no/such/route", "", 404, ""},
+      // Paths from the request line (RELIABILITY.md): encoded traversal out of the viewer's
+      // static mount or into the job store, NUL bytes, a job id that is a path.
+      {"GET", "/viewer/Cesium/..%2f..%2f..%2f..%2f..%2f..%2fetc%2fpasswd", "", 404, ""},
+      {"GET", "/viewer/Cesium/%2e%2e/%2e%2e/%2e%2e/%2e%2e/%2e%2e/etc/passwd", "", 404, ""},
+      {"GET", "/viewer/Cesium/Cesium.js%00.html", "", 400, "NUL byte"},  // was Cesium.js as text/html
+      {"GET", "/jobs/..%2f..%2fjobs%2f" + job_id + "/results/job.json", "", 404, ""},
+      {"GET", "/jobs/%2e%2e", "", 404, "no job with id '..'"},
+      {"GET", "/jobs/" + job_id + "%00/results/tileset.json", "", 400, "NUL byte"},
+      {"DELETE", "/jobs/%2e%2e%2f" + job_id, "", 404, "DELETE /jobs/../" + job_id + ": HTTP 404"},  // no route: the job lives on
   };
   return c;
 }
