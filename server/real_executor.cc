@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -52,7 +53,13 @@ void WriteFileAtomic(const std::string& path, const std::string& text) {
   {
     std::ofstream out(tmp, std::ios::binary);
     out << text;
-    SATMESH_CHECK(out.good(), ErrorCode::kIo, "cannot write '" + tmp + "'");
+    out.close();
+    if (out.fail()) {
+      const int error = errno;  // the failed write's (ENOSPC: the job waits for space)
+      std::error_code ignored;
+      fs::remove(tmp, ignored);
+      ThrowIoError("cannot write '" + tmp + "'", error);
+    }
   }
   fs::rename(tmp, path);
 }

@@ -1,4 +1,5 @@
 // PLY reader and writer (ascii, binary little/big endian).
+#include <cerrno>
 #include <algorithm>
 #include <bit>
 #include <charconv>
@@ -335,7 +336,7 @@ void WritePly(const std::string& path, const TriangleMesh& mesh, const MeshWrite
   }
   flush(true);
   out.close();
-  SATMESH_CHECK(!out.fail(), ErrorCode::kIo, "cannot write PLY file " + path);
+  if (out.fail()) ThrowIoError("cannot write PLY file " + path, errno);
 }
 
 }  // namespace satmesh::mesh_io_internal
