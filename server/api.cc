@@ -25,15 +25,21 @@ namespace {
 
 void MakeLinksAbsolute(const httplib::Request& req, json* body);
 
+// JSON text of an answer. Strings from the request (a path in a 404's detail, a job's
+// message naming a file) may hold invalid UTF-8, on which dump() throws: in httplib's error
+// handler that terminated the server (GET /jobs/x%FF..., found by fuzz_http). Replaced
+// by U+FFFD instead.
+std::string Text(const json& body) { return body.dump(-1, ' ', false, json::error_handler_t::replace); }
+
 void SendJson(const httplib::Request& req, httplib::Response& res, json body, int status = 200) {
   MakeLinksAbsolute(req, &body);
   res.status = status;
-  res.set_content(body.dump(), "application/json");
+  res.set_content(Text(body), "application/json");
 }
 
 void SendProblem(httplib::Response& res, const Problem& p) {
   res.status = p.status;
-  res.set_content(p.body.dump(), "application/problem+json");
+  res.set_content(Text(p.body), "application/problem+json");
 }
 
 bool ConstantTimeEquals(const std::string& a, const std::string& b) {
@@ -222,7 +228,7 @@ struct ApiServer::Impl {
           else *last = scheduler.version();
           const auto job = scheduler.Get(id);
           if (!job) return false;
-          const std::string event = "event: status\ndata: " + StatusInfo(*job).dump() + "\n\n";
+          const std::string event = "event: status\ndata: " + Text(StatusInfo(*job)) + "\n\n";
           if (!sink.write(event.data(), event.size())) return false;
           if (IsTerminal(job->status) || std::chrono::steady_clock::now() > deadline) sink.done();
           return true;

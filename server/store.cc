@@ -136,7 +136,7 @@ void JobStore::SaveRequest(const JobRecord& job) const {
 }
 
 void JobStore::SaveState(const JobRecord& job) const {
-  WriteAtomic(fs::path(JobDir(job.id)) / "state.json", StateToJson(job).dump(1));
+  WriteAtomic(fs::path(JobDir(job.id)) / "state.json", StateToJson(job).dump(1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
 std::vector<JobRecord> JobStore::LoadAll() const {

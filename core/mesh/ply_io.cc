@@ -266,6 +266,8 @@ TriangleMesh ReadPly(const std::string& path) {
             Fail(path, "PLY file is truncated: data ends in " + where());
           if (keep && (!std::isfinite(value) || value != std::floor(value)))
             Fail(path, "non-integer vertex index in " + where());
+          if (keep && std::abs(value) > 1e15)  // beyond long long's range: UB to convert
+            Fail(path, "vertex index " + std::to_string(value) + " out of range in " + where());
           corners[k] = keep ? (long long)value : 0;
         }
         if (keep)

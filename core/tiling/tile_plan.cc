@@ -27,6 +27,16 @@ GdalDatasetPtr OpenDsm(const std::string& path) {
   GdalDatasetPtr ds(GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
   SATMESH_CHECK(ds != nullptr, ErrorCode::kNotFound, "cannot open DSM '" + path + "'");
   SATMESH_CHECK(ds->GetRasterCount() >= 1, ErrorCode::kInvalidInput, "DSM '" + path + "' has no band");
+  // As for images (image_io.cc, CheckBlockSize): GDAL reads whole blocks of all
+  // pixel-interleaved bands; a forged header must not make it allocate gigabytes.
+  int bx = 0, by = 0;
+  ds->GetRasterBand(1)->GetBlockSize(&bx, &by);
+  const char* interleave = ds->GetMetadataItem("INTERLEAVE", "IMAGE_STRUCTURE");
+  const int samples = interleave && std::string(interleave) == "PIXEL" ? ds->GetRasterCount() : 1;
+  const double block_mb = double(bx) * by * samples * 8 / (1 << 20);
+  SATMESH_CHECK(block_mb <= 256, ErrorCode::kInvalidInput,
+                "DSM '" + path + "': one block of " + std::to_string(bx) + "x" + std::to_string(by) + " x " +
+                    std::to_string(samples) + " interleaved bands is too large to read (at most 256 MB)");
   return ds;
 }
 

@@ -98,6 +98,10 @@ std::vector<Case> Cases(const std::string& job_id) {
       {"GET", "/viewer/Cesium/Cesium.js%00.html", "", 400, "NUL byte"},  // was Cesium.js as text/html
       {"GET", "/jobs/..%2f..%2fjobs%2f" + job_id + "/results/job.json", "", 404, ""},
       {"GET", "/jobs/%2e%2e", "", 404, "no job with id '..'"},
+      // Invalid UTF-8 in the path: the 404's detail could not be serialised and the error
+      // handler's exception terminated the server (fuzz_http); now U+FFFD stands in.
+      {"GET", "/jobs/" + job_id + "/tiles/0_0.g%FF%FE%FF.glb", "", 404, "/tiles/0_0.g\xEF\xBF\xBD"},
+      {"GET", "/no/%C3%28/route", "", 404, "GET /no/\xEF\xBF\xBD(/route"},
       {"GET", "/jobs/" + job_id + "%00/results/tileset.json", "", 400, "NUL byte"},
       {"DELETE", "/jobs/%2e%2e%2f" + job_id, "", 404, "DELETE /jobs/../" + job_id + ": HTTP 404"},  // no route: the job lives on
   };
