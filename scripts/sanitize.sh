@@ -6,7 +6,7 @@
 #     the refinement's numerics are left to the normal build (minutes under ASan)
 #  2. every fuzz target of tests/fuzz over its committed corpus (seeds + regressions: a
 #     crash found once stays fixed), then FUZZ_S seconds of new fuzzing each
-#     (default 20; 0 = corpus only), two targets at a time (CI: 60)
+#     (default 20; 0 = corpus only), two targets at a time
 #   scripts/sanitize.sh [--fuzz-seconds N] [--seeds] [--no-tests]
 # --seeds rewrites the seed corpora from our writers (tests/fuzz/corpus/<target>/).
 # Needs clang-14, libfuzzer-14-dev, libomp-14-dev (docker/deps-debian12-test.txt).

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <random>
 #include <thread>
@@ -14,7 +15,9 @@
 namespace satmesh::server {
 namespace {
 
-const std::vector<double> kDurationBuckets = {0.1, 0.5, 1, 2, 5, 10, 30, 60, 120, 300, 600, 1800};
+// constexpr (no destructor): a worker still finishing a tile while the process exits must
+// not read a destroyed vector (ASan, fuzz_http).
+constexpr std::array<double, 12> kDurationBuckets = {0.1, 0.5, 1, 2, 5, 10, 30, 60, 120, 300, 600, 1800};
 
 std::string NewJobId() {
   std::random_device rd;
@@ -201,7 +204,7 @@ SchedulerStats Scheduler::Stats() const {
   }
   s.tiles_done = tiles_done_;
   s.tiles_failed = tiles_failed_;
-  s.duration_buckets_s = kDurationBuckets;
+  s.duration_buckets_s.assign(kDurationBuckets.begin(), kDurationBuckets.end());
   s.duration_counts = duration_counts_;
   s.duration_sum_s = duration_sum_s_;
   return s;

@@ -216,6 +216,12 @@ TriangleMesh ReadPly(const std::string& path) {
   long long num_vertices = -1;
   for (const PlyElement& element : header.elements) {
     const bool is_vertex = element.name == "vertex";
+    // Every row of an element with properties takes at least a byte; one without has no
+    // data to read (3.3e9 empty rows of an unknown element spun for minutes: fuzz_ply).
+    if (element.count > bytes.size())
+      Fail(path, "PLY header declares " + std::to_string(element.count) + " rows of an element '" +
+                     element.name + "', more than the file can hold (truncated?)");
+    if (element.properties.empty()) continue;
     // 0/1/2 for x/y/z, 3 for height_sigma, else -1
     std::vector<int> axis(element.properties.size());
     int found = 0;

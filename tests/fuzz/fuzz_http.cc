@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <thread>
@@ -62,6 +63,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   executor = std::make_unique<testing::StubExecutor>(testing::Stub(1, 1, 0));
   server = std::make_unique<ApiServer>(options, executor.get());
   port = server->Start();
+  std::atexit([] { server->Stop(); });  // before any static object is destroyed
   const std::string job = testing::MakeStubJob(options.inputs.data_roots[0]).dump();
   const std::string answer = Exchange("POST /processes/refine-mesh/execution HTTP/1.1\r\nHost: f\r\n"
                                       "Authorization: Bearer fuzz-token\r\nContent-Type: application/json\r\n"

@@ -156,7 +156,7 @@ def main():
     try:
         scene = os.path.join(work, "scene")
         subprocess.run([os.path.join(a.build, "client/satmesh"), "synth", "--out", scene, "--preset", "small",
-                        "--seed", "3"], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                        "--seed", "3", "--no-preview"], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         job = small_job(scene)
         port = 18000 + os.getpid() % 1000
         log = open(os.path.join(work, "server.log"), "w")

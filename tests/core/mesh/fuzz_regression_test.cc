@@ -30,6 +30,12 @@ TEST(FuzzRegression, PlyVertexIndexBeyondLongLong) {
   EXPECT_NE(message.find("out of range"), std::string::npos) << message;
 }
 
+// fuzz_ply: an element of 3.3e9 rows without properties looped for minutes.
+TEST(FuzzRegression, PlyElementOfBillionsOfEmptyRows) {
+  const std::string message = Refusal("ply/crash-timeout-3e9-empty-rows.ply");
+  EXPECT_NE(message.find("3344244444"), std::string::npos) << message;
+}
+
 // fuzz_drc: 48 bytes declaring ~2e8 faces made Draco allocate 2.9 GB before failing.
 TEST(FuzzRegression, DracoCountsBeyondWhatTheStreamCanEncode) {
   const std::string message = Refusal("drc/crash-oom-declares-2e8-faces.drc");
