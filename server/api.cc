@@ -1,6 +1,7 @@
 #include "server/api.h"
 
 #include <httplib.h>
+#include <sys/socket.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -24,6 +25,14 @@ using nlohmann::json;
 namespace {
 
 void MakeLinksAbsolute(const httplib::Request& req, json* body);
+
+// Debian's httplib (0.11) listens with a backlog of 5 (CPPHTTPLIB_LISTEN_BACKLOG, compiled
+// into the library): in a burst of new connections the rest wait for SYN retries (1 s,
+// 3 s: p99 2.7 s for 500 concurrent status requests, RELIABILITY.md). listen() again on
+// the bound socket raises it (Linux; capped by net.core.somaxconn).
+struct HttpServer : httplib::Server {
+  void RaiseListenBacklog(int backlog) { ::listen(svr_sock_, backlog); }
+};
 
 // JSON text of an answer. Strings from the request (a path in a 404's detail, a job's
 // message naming a file) may hold invalid UTF-8, on which dump() throws: in httplib's error
@@ -138,7 +147,7 @@ struct ApiServer::Impl {
   JobExecutor* executor;
   JobStore store;
   Scheduler scheduler;
-  httplib::Server http;
+  HttpServer http;
   std::thread listener;
   json job_schema, openapi;
   std::string viewer_dir, viewer_page;
@@ -426,6 +435,7 @@ int ApiServer::Start() {
     impl_->scheduler.Stop();
     ThrowError(ErrorCode::kIo, "cannot listen on " + o.host + ":" + std::to_string(o.port));
   }
+  impl_->http.RaiseListenBacklog(1024);
   impl_->listener = std::thread([this] { impl_->http.listen_after_bind(); });
   spdlog::info("satmesh-server listening on http://{}:{} (data: {}, {} worker(s))", o.host, port,
                o.data_dir, o.scheduler.workers);

@@ -128,7 +128,8 @@ def storm(port, job, n_status, n_submit):
         codes = {}
         for r in rs:
             codes[str(r[0])] = codes.get(str(r[0]), 0) + 1
-        out[kind] = {"answers": codes, "p50_ms": round(percentile(lat, 50), 1),
+        failures = sorted({r[1].decode(errors="replace")[:120] for r in rs if r[0] == 0})
+        out[kind] = {"answers": codes, "no_answer_errors": failures[:3], "p50_ms": round(percentile(lat, 50), 1),
                      "p99_ms": round(percentile(lat, 99), 1), "max_ms": round(max(lat), 1)}
     ids = [json.loads(r[1])["jobID"] for r in results["submit"] if r[0] == 201]
     finished = [wait_job(port, i)["status"] for i in ids]
