@@ -95,10 +95,16 @@ std::string BufferBytes(const draco::EncoderBuffer& buffer) {
 // reading the symbols, so ~30 bytes claiming 2^28 faces allocate gigabytes (found by
 // fuzz_drc). Refuse counts the stream cannot encode: edgebreaker needs ~1 bit per face,
 // so 1000 faces or vertices per byte is far beyond any real file (our tiles: < 1 per byte).
-// Checked for the 2.2 bitstream our writer and current encoders emit, without metadata.
+// Checked for the 2.2 bitstream that our writer and every Draco since 1.0 (2017) emit;
+// older bitstreams (fixed-size counts, found by fuzz_drc to allocate gigabytes too) are
+// refused.
 void CheckDracoCounts(const std::string& path, const char* data, size_t size) {
   const auto* b = reinterpret_cast<const unsigned char*>(data);
-  if (size < 12 || std::string(data, 5) != "DRACO" || b[5] != 2 || b[6] != 2 || b[7] != 1) return;
+  if (size < 12 || std::string(data, 5) != "DRACO") return;  // Draco names what is wrong
+  SATMESH_CHECK(b[5] == 2 && b[6] == 2, ErrorCode::kInvalidInput,
+                "Draco data in " + path + ": bitstream version " + std::to_string(b[5]) + "." +
+                    std::to_string(b[6]) + " is not supported (2.2, written by Draco >= 1.0)");
+  if (b[7] != 1) return;  // a point cloud: no faces
   if ((b[9] | (b[10] << 8)) & 0x8000) return;  // metadata precedes the connectivity
   size_t at = b[8] == 1 ? 12 : 11;             // edgebreaker: a traversal-type byte first
   uint64_t counts[2] = {0, 0};

@@ -91,7 +91,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (target.empty() || target[0] != '/') target = "/" + target;
   std::string request = method + " " + target + " HTTP/1.1\r\nHost: fuzz\r\nConnection: close\r\n";
   if (authorised) request += "Authorization: Bearer fuzz-token\r\n";
-  if (!body.empty()) request += "Content-Type: application/json\r\nContent-Length: " + std::to_string(body.size()) + "\r\n";
+  // Always a length: without one httplib waits out its 5 s read timeout for a POST body
+  // (a fuzzing speed of 2 requests a second).
+  if (!body.empty()) request += "Content-Type: application/json\r\n";
+  request += "Content-Length: " + std::to_string(body.size()) + "\r\n";
   request += "\r\n" + body;
   const std::string answer = Exchange(request);
   if (answer.rfind("HTTP/1.1 ", 0) != 0) satmesh::fuzz::Fail("no HTTP answer to: " + request.substr(0, 200));

@@ -42,6 +42,12 @@ TEST(FuzzRegression, DracoCountsBeyondWhatTheStreamCanEncode) {
   EXPECT_NE(message.find("faces/vertices, more than it can encode"), std::string::npos) << message;
 }
 
+// fuzz_drc (second round): an old 1.x bitstream with fixed-size counts, also gigabytes.
+TEST(FuzzRegression, DracoBitstreamBefore22) {
+  const std::string message = Refusal("drc/crash-oom-bitstream-1.253.drc");
+  EXPECT_NE(message.find("bitstream version 1.253 is not supported"), std::string::npos) << message;
+}
+
 // fuzz_drc: a position attribute of type bool made Draco read arbitrary bytes as bool.
 TEST(FuzzRegression, DracoPositionsOfTypeBool) {
   const std::string message = Refusal("drc/crash-bool-position-attribute.drc");
