@@ -1,4 +1,5 @@
 // Draco (.drc) and glTF binary with KHR_draco_mesh_compression (.glb), tile-local.
+#include <algorithm>
 #include <cmath>
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>
@@ -107,17 +108,23 @@ void CheckDracoCounts(const std::string& path, const char* data, size_t size) {
   if (b[7] != 1) return;  // a point cloud: no faces
   if ((b[9] | (b[10] << 8)) & 0x8000) return;  // metadata precedes the connectivity
   size_t at = b[8] == 1 ? 12 : 11;             // edgebreaker: a traversal-type byte first
-  uint64_t counts[2] = {0, 0};
-  for (uint64_t& count : counts) {
+  // Edgebreaker: vertices, faces, (a byte), symbols, split symbols; sequential: faces, points.
+  const bool edgebreaker = b[8] == 1;
+  uint64_t counts[4] = {0, 0, 0, 0};
+  for (int k = 0; k < (edgebreaker ? 4 : 2); ++k) {
+    if (edgebreaker && k == 2) ++at;  // num_attribute_data
     for (int shift = 0; at < size && shift < 35; shift += 7) {
-      count |= uint64_t(b[at] & 0x7f) << shift;
+      counts[k] |= uint64_t(b[at] & 0x7f) << shift;
       if (!(b[at++] & 0x80)) break;
     }
   }
   const uint64_t limit = 1000 * uint64_t(size);
-  if (counts[0] > limit || counts[1] > limit)
-    ThrowError(ErrorCode::kInvalidInput, "Draco data in " + path + ": stream of " + std::to_string(size) + " bytes declares " + std::to_string(counts[0]) +
-                   " and " + std::to_string(counts[1]) + " faces/vertices, more than it can encode");
+  if (*std::max_element(counts, counts + 4) > limit)
+    ThrowError(ErrorCode::kInvalidInput,
+               "Draco data in " + path + ": stream of " + std::to_string(size) + " bytes declares " +
+                   std::to_string(counts[0]) + " and " + std::to_string(counts[1]) +
+                   " faces/vertices (or symbols " + std::to_string(counts[2]) + ", " +
+                   std::to_string(counts[3]) + "), more than it can encode");
 }
 
 TriangleMesh DecodeDracoBytes(const std::string& path, const char* data, size_t size) {

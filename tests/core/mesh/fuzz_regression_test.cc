@@ -39,7 +39,7 @@ TEST(FuzzRegression, PlyElementOfBillionsOfEmptyRows) {
 // fuzz_drc: 48 bytes declaring ~2e8 faces made Draco allocate 2.9 GB before failing.
 TEST(FuzzRegression, DracoCountsBeyondWhatTheStreamCanEncode) {
   const std::string message = Refusal("drc/crash-oom-declares-2e8-faces.drc");
-  EXPECT_NE(message.find("faces/vertices, more than it can encode"), std::string::npos) << message;
+  EXPECT_NE(message.find("more than it can encode"), std::string::npos) << message;
 }
 
 // fuzz_drc (second round): an old 1.x bitstream with fixed-size counts, also gigabytes.
