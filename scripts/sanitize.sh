@@ -58,11 +58,7 @@ run_one() {
   # The committed corpus (seeds, regressions) first: every input must pass.
   "$build/tests/fuzz/$target" -rss_limit_mb=2048 -timeout=10 "$dir" -runs=0 >"$out/corpus.log" 2>&1 \
     || { echo "sanitize: $target FAILS on its committed corpus (log: $out/corpus.log)"; return 1; }
-  # fuzz_http: corpus replay only unless FUZZ_HTTP_S is set: after 12,000-60,000 requests
-  # it once saw the server not answer a POST within 10 s (not reproduced alone; open,
-  # RELIABILITY.md), which would make CI flaky.
   local seconds="$fuzz_s"
-  [ "$target" = fuzz_http ] && seconds="${FUZZ_HTTP_S:-0}"
   if [ "$seconds" -gt 0 ]; then
     "$build/tests/fuzz/$target" -rss_limit_mb=2048 -timeout=10 -max_total_time="$seconds" -print_final_stats=1 \
       -artifact_prefix="$out/" "$work" "$dir" >"$out/fuzz.log" 2>&1 \

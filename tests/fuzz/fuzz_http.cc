@@ -6,11 +6,14 @@
 // aborts the process).
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <thread>
@@ -29,6 +32,7 @@ std::string job_id;
 
 // One request over a fresh connection; returns the raw answer ("" when none).
 std::string Exchange(const std::string& request) {
+  const bool head = request.rfind("HEAD ", 0) == 0;  // headers only: no body follows
   const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
@@ -36,16 +40,40 @@ std::string Exchange(const std::string& request) {
   addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   timeval timeout{10, 0};
   ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof(timeout));
+  // Closed with a reset, not into TIME_WAIT: tens of thousands of connections a minute
+  // would use up the ephemeral ports and the next connect() would fail (EADDRNOTAVAIL).
+  const linger reset{1, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_LINGER, &reset, sizeof(reset));
   std::string answer;
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) == 0 &&
-      ::send(fd, request.data(), request.size(), MSG_NOSIGNAL) == ssize_t(request.size())) {
+  int connected = ::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
+  if (connected != 0 && errno == EINTR) {  // the connection goes on: wait until writable
+    pollfd p{fd, POLLOUT, 0};
+    while (::poll(&p, 1, 10000) < 0 && errno == EINTR) {
+    }
+    int error = 0;
+    socklen_t length = sizeof(error);
+    ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &error, &length);
+    connected = error == 0 && (p.revents & POLLOUT) ? 0 : -1;
+  }
+  ssize_t sent = 0;
+  while (connected == 0 && sent < ssize_t(request.size())) {
+    const ssize_t n = ::send(fd, request.data() + sent, request.size() - size_t(sent), MSG_NOSIGNAL);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    sent += n;
+  }
+  if (connected == 0 && sent == ssize_t(request.size())) {
     char buffer[65536];
-    for (ssize_t n; (n = ::recv(fd, buffer, sizeof(buffer), 0)) > 0;) {
+    // (EINTR: libFuzzer's -timeout alarm fires every second and interrupts recv; taken
+    // for "no answer" it made every long run fail after a while.)
+    for (ssize_t n; (n = ::recv(fd, buffer, sizeof(buffer), 0)) > 0 || (n < 0 && errno == EINTR);) {
+      if (n < 0) continue;
       answer.append(buffer, size_t(n));
       // Done when the body announced by Content-Length is in (httplib may keep the
       // connection open after some error answers despite "Connection: close").
       const size_t end = answer.find("\r\n\r\n");
       const size_t length_at = answer.find("Content-Length: ");
+      if (end != std::string::npos && head) break;
       if (end != std::string::npos && length_at != std::string::npos && length_at < end &&
           answer.size() >= end + 4 + std::strtoul(answer.c_str() + length_at + 16, nullptr, 10))
         break;
@@ -110,7 +138,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   request += "Content-Length: " + std::to_string(body.size()) + "\r\n";
   request += "\r\n" + body;
   const std::string answer = Exchange(request);
-  if (answer.rfind("HTTP/1.1 ", 0) != 0) satmesh::fuzz::Fail("no HTTP answer to: " + request.substr(0, 200));
+  if (answer.rfind("HTTP/1.1 ", 0) != 0)
+    satmesh::fuzz::Fail("no HTTP answer (" + std::string(std::strerror(errno)) + ") to: " + request.substr(0, 200));
   const int status = std::atoi(answer.c_str() + 9);
   if (status >= 500) satmesh::fuzz::Fail("HTTP " + std::to_string(status) + " for: " + request.substr(0, 300) + "\n" + answer.substr(0, 600));
   return 0;
