@@ -1,6 +1,7 @@
 #include "server/api.h"
 
 #include <httplib.h>
+#include <sys/socket.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -25,15 +26,29 @@ namespace {
 
 void MakeLinksAbsolute(const httplib::Request& req, json* body);
 
+// Debian's httplib (0.11) listens with a backlog of 5 (CPPHTTPLIB_LISTEN_BACKLOG, compiled
+// into the library): in a burst of new connections the rest wait for SYN retries (1 s,
+// 3 s: p99 2.7 s for 500 concurrent status requests, RELIABILITY.md). listen() again on
+// the bound socket raises it (Linux; capped by net.core.somaxconn).
+struct HttpServer : httplib::Server {
+  void RaiseListenBacklog(int backlog) { ::listen(svr_sock_, backlog); }
+};
+
+// JSON text of an answer. Strings from the request (a path in a 404's detail, a job's
+// message naming a file) may hold invalid UTF-8, on which dump() throws: in httplib's error
+// handler that terminated the server (GET /jobs/x%FF..., found by fuzz_http). Replaced
+// by U+FFFD instead.
+std::string Text(const json& body) { return body.dump(-1, ' ', false, json::error_handler_t::replace); }
+
 void SendJson(const httplib::Request& req, httplib::Response& res, json body, int status = 200) {
   MakeLinksAbsolute(req, &body);
   res.status = status;
-  res.set_content(body.dump(), "application/json");
+  res.set_content(Text(body), "application/json");
 }
 
 void SendProblem(httplib::Response& res, const Problem& p) {
   res.status = p.status;
-  res.set_content(p.body.dump(), "application/problem+json");
+  res.set_content(Text(p.body), "application/problem+json");
 }
 
 bool ConstantTimeEquals(const std::string& a, const std::string& b) {
@@ -132,7 +147,7 @@ struct ApiServer::Impl {
   JobExecutor* executor;
   JobStore store;
   Scheduler scheduler;
-  httplib::Server http;
+  HttpServer http;
   std::thread listener;
   json job_schema, openapi;
   std::string viewer_dir, viewer_page;
@@ -163,6 +178,8 @@ struct ApiServer::Impl {
       job = json(job["job"]);
       if (!job.is_object()) throw HttpError(400, "bad-request", "inputs.job: must be an object (the job)");
     }
+    if (job.is_object() && job.contains("images") && job["images"].is_array())
+      CheckImageCount(job["images"].size(), options.inputs);
     ResolveHrefs(&job, options.inputs);
     // The server's budget per worker, unless the job names its own (kept in the record).
     if (job.is_object() && (!job.contains("tiling") || job["tiling"].is_object()) &&
@@ -220,7 +237,7 @@ struct ApiServer::Impl {
           else *last = scheduler.version();
           const auto job = scheduler.Get(id);
           if (!job) return false;
-          const std::string event = "event: status\ndata: " + StatusInfo(*job).dump() + "\n\n";
+          const std::string event = "event: status\ndata: " + Text(StatusInfo(*job)) + "\n\n";
           if (!sink.write(event.data(), event.size())) return false;
           if (IsTerminal(job->status) || std::chrono::steady_clock::now() > deadline) sink.done();
           return true;
@@ -370,6 +387,12 @@ struct ApiServer::Impl {
       return httplib::Server::HandlerResponse::Handled;
     }));
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+      // httplib decodes %00 into the path; a file name would end there ("Cesium.js%00.html"
+      // would serve Cesium.js as text/html). No route has a NUL: refused before any.
+      if (req.path.find('\0') != std::string::npos) {
+        SendProblem(res, ProblemForStatus(400, "the request path contains a NUL byte (%00)"));
+        return httplib::Server::HandlerResponse::Handled;
+      }
       if (AnswerCorsAndMethods(req, res)) return httplib::Server::HandlerResponse::Handled;
       if (options.token.empty() || IsPublicPage(req.path)) return httplib::Server::HandlerResponse::Unhandled;
       const std::string auth = req.get_header_value("Authorization");
@@ -412,6 +435,7 @@ int ApiServer::Start() {
     impl_->scheduler.Stop();
     ThrowError(ErrorCode::kIo, "cannot listen on " + o.host + ":" + std::to_string(o.port));
   }
+  impl_->http.RaiseListenBacklog(1024);
   impl_->listener = std::thread([this] { impl_->http.listen_after_bind(); });
   spdlog::info("satmesh-server listening on http://{}:{} (data: {}, {} worker(s))", o.host, port,
                o.data_dir, o.scheduler.workers);

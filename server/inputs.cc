@@ -1,8 +1,11 @@
 #include "server/inputs.h"
 
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 
 #include "core/common/error.h"
+#include "core/image/image_io.h"
 #include "server/problem.h"
 
 namespace satmesh::server {
@@ -28,12 +31,36 @@ bool IsUnder(const fs::path& path, const fs::path& root) {
   return true;
 }
 
+// A remote server may decode %2e%2e/%2f into a path outside the allowed prefix.
+bool HasEncodedSeparator(const std::string& href) {
+  std::string lower = href;
+  for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return href.find('\\') != std::string::npos || lower.find("%2e") != std::string::npos ||
+         lower.find("%2f") != std::string::npos || lower.find("%5c") != std::string::npos;
+}
+
+// The file must be a self-contained raster format: a VRT (or WMS, ...) under a data root
+// would make GDAL read files or URLs named inside it.
+std::string CheckDriver(const std::string& path, const std::string& href, const std::string& field) {
+  const std::string driver = RasterDriverName(path);
+  if (driver.empty()) return path;  // not a raster GDAL knows: the input checks name it
+  for (const char* allowed : kInputRasterDrivers)
+    if (driver == allowed) return path;
+  Forbidden(field, "'" + href + "' is a " + driver +
+                       " file; inputs must be a self-contained raster format (GTiff, COG, NITF, "
+                       "JP2OpenJPEG, PNG, JPEG, HFA), not one that references other files or URLs");
+}
+
 std::string Resolve(const std::string& href, const std::string& field, const InputPolicy& policy) {
   if (href.find('\0') != std::string::npos) Forbidden(field, "contains a NUL byte");
   if (HasDotDot(href)) Forbidden(field, "'..' is not allowed in hrefs");
   if (href.rfind("/vsi", 0) == 0) {
-    for (const auto& prefix : policy.allowed_vsi)
-      if (href.rfind(prefix, 0) == 0) return href;
+    for (const auto& prefix : policy.allowed_vsi) {
+      if (href.rfind(prefix, 0) != 0) continue;
+      if (HasEncodedSeparator(href.substr(prefix.size())))
+        Forbidden(field, "'" + href + "': encoded dots, slashes or backslashes are not allowed in virtual paths");
+      return CheckDriver(href, href, field);
+    }
     Forbidden(field, "GDAL virtual path '" + href + "' is not allowed by this server");
   }
   if (policy.data_roots.empty()) Forbidden(field, "this server has no data roots for file inputs");
@@ -48,7 +75,7 @@ std::string Resolve(const std::string& href, const std::string& field, const Inp
     const fs::path real_root = fs::canonical(root, ec);
     if (!ec && IsUnder(real, real_root)) {
       if (!fs::is_regular_file(real)) ThrowError(ErrorCode::kInvalidArgument, field + ": '" + href + "' is not a file");
-      return real.string();
+      return CheckDriver(real.string(), href, field);
     }
   }
   Forbidden(field, "'" + href + "' is outside the server's data roots");
@@ -60,7 +87,9 @@ std::string InputPolicy::Check() const {
   for (const auto& root : data_roots)
     if (!fs::is_directory(root)) return "data root '" + root + "' is not a directory";
   for (const auto& prefix : allowed_vsi)
-    if (prefix.rfind("/vsi", 0) != 0) return "allowed virtual path '" + prefix + "' does not start with /vsi";
+    if (prefix.rfind("/vsi", 0) != 0 || prefix.back() != '/')
+      return "allowed virtual path '" + prefix + "' must start with /vsi and end with '/' (else "
+             "'/vsicurl/https://host' would also allow https://host.evil.example)";
   if (max_images < 2) return "max_images: must be >= 2";
   if (max_tiles < 1) return "max_tiles: must be >= 1";
   if (max_pixels < 1) return "max_pixels: must be >= 1";
@@ -85,11 +114,15 @@ void ResolveHrefs(nlohmann::json* job, const InputPolicy& policy) {
   }
 }
 
-void CheckLimits(const JobSpec& spec, const ExecutionPlan& plan, const InputPolicy& policy) {
-  if (int(spec.images.size()) > policy.max_images)
-    ThrowError(ErrorCode::kInvalidArgument, "images: " + std::to_string(spec.images.size()) +
+void CheckImageCount(size_t images, const InputPolicy& policy) {
+  if (images > size_t(std::max(0, policy.max_images)))
+    ThrowError(ErrorCode::kInvalidArgument, "images: " + std::to_string(images) +
                                                 " images exceed this server's limit of " +
                                                 std::to_string(policy.max_images));
+}
+
+void CheckLimits(const JobSpec& spec, const ExecutionPlan& plan, const InputPolicy& policy) {
+  CheckImageCount(spec.images.size(), policy);
   if (int(plan.tiles.size()) > policy.max_tiles)
     ThrowError(ErrorCode::kInvalidArgument, "job: " + std::to_string(plan.tiles.size()) +
                                                 " tiles exceed this server's limit of " +

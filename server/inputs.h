@@ -20,11 +20,24 @@ struct InputPolicy {
   std::string Check() const;
 };
 
+// GDAL drivers an input may be opened with: self-contained raster formats (no VRT, WMS
+// or other format that makes GDAL read further files or URLs named inside the file).
+inline constexpr const char* kInputRasterDrivers[] = {"GTiff", "COG", "NITF", "JP2OpenJPEG", "PNG", "JPEG", "HFA"};
+
 // Rewrites every href of the job (images[i].href, initial.dsm) to an absolute, resolved
 // path. Throws HttpError 403 for a path outside the roots (or a virtual path not allowed)
 // and Error{kInvalidArgument} naming the field for a file that does not exist. Fields of
 // the wrong shape are left for the job parser to name.
+// Refused with 403 (RELIABILITY.md, "Paths from requests"): NUL bytes; ".." components;
+// symlinks and absolute paths leading outside the roots; /vsi prefixes not allowed; in
+// an allowed virtual path, URL-encoded dots, slashes or backslashes (%2e, %2f, %5c) and
+// backslashes, which a remote server may decode into a path outside the allowed prefix;
+// a file (local or virtual) that GDAL would open with a driver not in kInputRasterDrivers.
 void ResolveHrefs(nlohmann::json* job, const InputPolicy& policy);
+
+// Throws Error{kInvalidArgument} when `images` exceed policy.max_images: checked on the
+// request before any href is looked up (a job of 500 images costs no file access).
+void CheckImageCount(size_t images, const InputPolicy& policy);
 
 // Throws Error{kInvalidArgument} naming the limit a planned job exceeds.
 void CheckLimits(const JobSpec& spec, const ExecutionPlan& plan, const InputPolicy& policy);

@@ -17,6 +17,7 @@ const char* Title(int status) {
     case 415: return "Unsupported Media Type";
     case 422: return "Unprocessable Content";
     case 503: return "Service Unavailable";
+    case 507: return "Insufficient Storage";
     default: return status < 500 ? "Client Error" : "Internal Server Error";
   }
 }
@@ -31,6 +32,7 @@ int StatusFor(ErrorCode code) {
     case ErrorCode::kCancelled: return 409;
     case ErrorCode::kNotConverged: return 422;
     case ErrorCode::kIo: return 500;
+    case ErrorCode::kNoSpace: return 507;
     case ErrorCode::kInternal: return 500;
   }
   return 500;

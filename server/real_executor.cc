@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -9,6 +10,7 @@
 #include "core/common/error.h"
 #include "core/image/image_io.h"
 #include "core/mesh/mesh_io.h"
+#include "core/tiling/input_check.h"
 #include "core/tiling/job.h"
 #include "proto/job_pictures.h"
 #include "proto/job_spec_json.h"
@@ -51,7 +53,13 @@ void WriteFileAtomic(const std::string& path, const std::string& text) {
   {
     std::ofstream out(tmp, std::ios::binary);
     out << text;
-    SATMESH_CHECK(out.good(), ErrorCode::kIo, "cannot write '" + tmp + "'");
+    out.close();
+    if (out.fail()) {
+      const int error = errno;  // the failed write's (ENOSPC: the job waits for space)
+      std::error_code ignored;
+      fs::remove(tmp, ignored);
+      ThrowIoError("cannot write '" + tmp + "'", error);
+    }
   }
   fs::rename(tmp, path);
 }
@@ -82,7 +90,9 @@ ExecutionPlan RealExecutor::Plan(const JobSpec& spec) {
     plan.pixels += int64_t(info.width) * info.height;
   }
   InfoFor(spec.initial_dsm, "initial.dsm");
-  for (const PlannedTile& tile : PlanJob(spec).tiles) plan.tiles.push_back({tile.x, tile.y});
+  const JobPlan job_plan = PlanJob(spec);
+  CheckJobInputs(spec, job_plan);  // bad data refused at submission, named (422)
+  for (const PlannedTile& tile : job_plan.tiles) plan.tiles.push_back({tile.x, tile.y});
   return plan;
 }
 

@@ -3,8 +3,10 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <random>
+#include <thread>
 
 #include "core/common/error.h"
 #include "core/common/threads.h"
@@ -13,7 +15,9 @@
 namespace satmesh::server {
 namespace {
 
-const std::vector<double> kDurationBuckets = {0.1, 0.5, 1, 2, 5, 10, 30, 60, 120, 300, 600, 1800};
+// constexpr (no destructor): a worker still finishing a tile while the process exits must
+// not read a destroyed vector (ASan, fuzz_http).
+constexpr std::array<double, 12> kDurationBuckets = {0.1, 0.5, 1, 2, 5, 10, 30, 60, 120, 300, 600, 1800};
 
 std::string NewJobId() {
   std::random_device rd;
@@ -32,6 +36,8 @@ bool AllDone(const JobRecord& r) {
 
 std::string SchedulerOptions::Check() const {
   if (workers < 1 || workers > 256) return "workers: " + std::to_string(workers) + " not in [1, 256]";
+  if (!(no_space_retry_s > 0 && no_space_retry_s <= 3600))
+    return "no_space_retry_s: " + std::to_string(no_space_retry_s) + " not in (0, 3600]";
   return "";
 }
 
@@ -198,7 +204,7 @@ SchedulerStats Scheduler::Stats() const {
   }
   s.tiles_done = tiles_done_;
   s.tiles_failed = tiles_failed_;
-  s.duration_buckets_s = kDurationBuckets;
+  s.duration_buckets_s.assign(kDurationBuckets.begin(), kDurationBuckets.end());
   s.duration_counts = duration_counts_;
   s.duration_sum_s = duration_sum_s_;
   return s;
@@ -292,21 +298,22 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
     }
     change_cv_.notify_all();
   };
-  enum { kDone, kFailed, kCancelled } outcome = kDone;
+  enum { kDone, kFailed, kCancelled, kNoSpace } outcome = kDone;
   std::string message;
   nlohmann::json result;
   const auto t0 = std::chrono::steady_clock::now();
   try {
     result = executor_->RunTile(spec, key, store_->JobDir(id), progress);
   } catch (const Error& err) {
-    outcome = err.code() == ErrorCode::kCancelled ? kCancelled : kFailed;
+    outcome = err.code() == ErrorCode::kCancelled ? kCancelled
+              : err.code() == ErrorCode::kNoSpace ? kNoSpace : kFailed;
     message = err.what();
   } catch (const std::exception& err) {
     outcome = kFailed;
     message = err.what();
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  bool remove_outputs = false, more_work = false;
+  bool remove_outputs = false, more_work = false, retry_later = false;
   // A finished tile is written to disk before anyone can see it done, so a tile reported
   // done is never run again after a crash (save_mu_ held until memory matches the disk).
   std::unique_lock save(save_mu_, std::defer_lock);
@@ -337,6 +344,8 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
     --e.running;
     if (outcome == kDone && e.record.status != JobStatus::kDismissed) {
       t.status = TileStatus::kDone;
+      t.message.clear();
+      if (e.record.message.rfind("waiting for disk space", 0) == 0) e.record.message.clear();
       t.progress = 1;
       t.duration_s = seconds;
       t.result = std::move(result);
@@ -357,12 +366,21 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
         for (auto& other : e.record.tiles)
           if (other.status == TileStatus::kQueued) other.status = TileStatus::kCancelled;
       }
+    } else if (outcome == kNoSpace && e.record.status != JobStatus::kDismissed) {
+      // A full disk is not the tile's fault: back to the queue, retried after a pause.
+      t.status = TileStatus::kQueued;
+      t.progress = 0;
+      t.message = message;
+      e.record.message = "waiting for disk space: tile " + key.Name() + ": " + message;
+      retry_later = true;
     } else if (e.record.status == JobStatus::kDismissed || outcome == kDone) {
       t.status = TileStatus::kCancelled;
     } else {
       t.status = TileStatus::kQueued;  // server stopping: resume on the next start
     }
     if (outcome == kFailed) spdlog::warn("job {} tile {} failed: {}", id, key.Name(), message);
+    if (retry_later)
+      spdlog::warn("job {} tile {}: {}; retried in {} s", id, key.Name(), message, options_.no_space_retry_s);
     remove_outputs = e.record.status == JobStatus::kDismissed && e.running == 0;
     if (more_work) ready_.push_back(id);
     Touch(&e);
@@ -372,6 +390,21 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
   if (remove_outputs) store_->RemoveOutputs(id);
   if (more_work) work_cv_.notify_one();
   change_cv_.notify_all();
+  if (retry_later) RetryAfterPause(id);
+}
+
+void Scheduler::RetryAfterPause(const std::string& id) {
+  // In short sleeps (not on work_cv_, whose single wake-ups belong to idle workers), so a
+  // stopping server does not wait for the pause.
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(options_.no_space_retry_s);
+  while (!stopping_ && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  {
+    std::lock_guard lock(mu_);
+    if (stopping_ || std::find(ready_.begin(), ready_.end(), id) != ready_.end()) return;
+    ready_.push_back(id);
+  }
+  work_cv_.notify_one();
 }
 
 void Scheduler::AssembleJob(const std::string& id) {
@@ -388,8 +421,12 @@ void Scheduler::AssembleJob(const std::string& id) {
     }
   }
   std::string message;
+  bool no_space = false;
   try {
     executor_->Assemble(spec, keys, results, store_->JobDir(id));
+  } catch (const Error& err) {
+    no_space = err.code() == ErrorCode::kNoSpace;
+    message = std::string("assembling the outputs: ") + err.what();
   } catch (const std::exception& err) {
     message = std::string("assembling the outputs: ") + err.what();
   }
@@ -398,7 +435,9 @@ void Scheduler::AssembleJob(const std::string& id) {
     std::lock_guard lock(mu_);
     Entry& e = jobs_.at(id);
     e.assembling = false;
-    if (e.record.status != JobStatus::kDismissed) {
+    if (no_space && e.record.status != JobStatus::kDismissed) {
+      e.record.message = "waiting for disk space: " + message;  // assembled again after a pause
+    } else if (e.record.status != JobStatus::kDismissed) {
       e.record.assembled = message.empty();
       e.record.status = message.empty() ? JobStatus::kSuccessful : JobStatus::kFailed;
       e.record.message = message.empty() ? "done" : message;
@@ -410,6 +449,10 @@ void Scheduler::AssembleJob(const std::string& id) {
   Persist(id);
   if (remove_outputs) store_->RemoveOutputs(id);
   change_cv_.notify_all();
+  if (no_space) {
+    spdlog::warn("job {}: {}; retried in {} s", id, message, options_.no_space_retry_s);
+    RetryAfterPause(id);
+  }
 }
 
 }  // namespace satmesh::server

@@ -19,6 +19,10 @@ namespace satmesh::server {
 
 struct SchedulerOptions {
   int workers = 2;  // tile worker threads, in [1, 256]
+  // A tile (or the assembly) that fails for lack of disk space (Error{kNoSpace}) is not
+  // failed: it goes back to the queue and its worker retries it after this long, so the
+  // job resumes once space is back. Seconds, in (0, 3600].
+  double no_space_retry_s = 10;
   std::string Check() const;
 };
 
@@ -67,6 +71,8 @@ class Scheduler {
   void WorkerLoop();
   void RunOneTile(const std::string& id, size_t tile_index);
   void AssembleJob(const std::string& id);
+  // After a kNoSpace failure: waits options_.no_space_retry_s, then queues the job again.
+  void RetryAfterPause(const std::string& id);
   void Persist(const std::string& id);
   void Touch(Entry* e);  // updated timestamp + change counter (mu_ held)
 

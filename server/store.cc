@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cerrno>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -23,17 +24,25 @@ constexpr const char* kTileNames[] = {"queued", "running", "done", "failed", "ca
 // new file, never a partial one.
 void WriteAtomic(const fs::path& path, const std::string& text) {
   const fs::path tmp = path.string() + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  SATMESH_CHECK(fd >= 0, ErrorCode::kIo, "cannot write '" + tmp.string() + "'");
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) ThrowIoError("cannot write '" + tmp.string() + "'", errno);
   size_t written = 0;
+  int error = 0;
   while (written < text.size()) {
     const ssize_t n = ::write(fd, text.data() + written, text.size() - written);
-    if (n <= 0) break;
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      error = n < 0 ? errno : ENOSPC;
+      break;
+    }
     written += size_t(n);
   }
-  const bool ok = written == text.size() && ::fsync(fd) == 0;
+  if (error == 0 && ::fsync(fd) != 0) error = errno;
   ::close(fd);
-  SATMESH_CHECK(ok, ErrorCode::kIo, "cannot write '" + tmp.string() + "'");
+  if (error != 0) {  // the previous file stays whole; no partial .tmp is left behind
+    ::unlink(tmp.c_str());
+    ThrowIoError("cannot write '" + tmp.string() + "'", error);
+  }
   fs::rename(tmp, path);
 }
 
@@ -127,7 +136,7 @@ void JobStore::SaveRequest(const JobRecord& job) const {
 }
 
 void JobStore::SaveState(const JobRecord& job) const {
-  WriteAtomic(fs::path(JobDir(job.id)) / "state.json", StateToJson(job).dump(1));
+  WriteAtomic(fs::path(JobDir(job.id)) / "state.json", StateToJson(job).dump(1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
 std::vector<JobRecord> JobStore::LoadAll() const {

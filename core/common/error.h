@@ -15,6 +15,7 @@ enum class ErrorCode {
   kInvalidInput,     // a malformed input file or model (named in the message)
   kNotFound,         // a file or resource that does not exist
   kIo,               // reading/writing failed
+  kNoSpace,          // writing failed for lack of disk space (ENOSPC, EDQUOT): retry later
   kNotConverged,     // an iterative method failed where the caller required success
   kCancelled,        // the caller asked to stop
   kInternal,         // a bug
@@ -33,6 +34,12 @@ class Error : public std::runtime_error {
 };
 
 [[noreturn]] void ThrowError(ErrorCode code, const std::string& message);
+// For a failed system call with `errno_value`: Error{kNoSpace} for ENOSPC/EDQUOT, else
+// Error{kIo}; the message is `what` + ": " + strerror ("No space left on device").
+[[noreturn]] void ThrowIoError(const std::string& what, int errno_value);
+// For a library's write error text (GDAL/libtiff put strerror in it): kNoSpace when it
+// says "No space left on device" or "Disk quota exceeded", else kIo.
+ErrorCode WriteErrorCode(const std::string& message);
 
 }  // namespace satmesh
 

@@ -177,13 +177,16 @@ void WriteDsm(const std::string& path, const Dsm& dsm) {
   }
   GDALRasterBand* band = ds->GetRasterBand(1);
   band->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
-  SATMESH_CHECK(band->RasterIO(GF_Write, 0, 0, dsm.width, dsm.height,
-                               const_cast<float*>(dsm.z.data()), dsm.width, dsm.height,
-                               GDT_Float32, 0, 0, nullptr) == CE_None,
-                ErrorCode::kIo, "writing DSM " + path + " failed" + LastGdalError());
-  ds->FlushCache();
-  SATMESH_CHECK(CPLGetLastErrorType() < CE_Failure, ErrorCode::kIo,
-                "writing DSM " + path + " failed" + LastGdalError());
+  bool ok = band->RasterIO(GF_Write, 0, 0, dsm.width, dsm.height, const_cast<float*>(dsm.z.data()),
+                           dsm.width, dsm.height, GDT_Float32, 0, 0, nullptr) == CE_None;
+  if (ok) {
+    ds->FlushCache();
+    ok = CPLGetLastErrorType() < CE_Failure;
+  }
+  if (!ok) {  // a full disk is kNoSpace (the server waits for space), anything else kIo
+    const std::string message = "writing DSM " + path + " failed" + LastGdalError();
+    ThrowError(WriteErrorCode(message), message);
+  }
 }
 
 TriangleMesh MeshFromDsm(const Dsm& dsm) {

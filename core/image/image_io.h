@@ -18,6 +18,9 @@ struct PixelWindow {
 
 // Throws Error{kNotFound}/{kIo} naming the file.
 RasterInfo ReadRasterInfo(const std::string& path);
+// The short name of the GDAL driver that would open `path` ("GTiff", "VRT", ...), found
+// from the file's first bytes without opening it; "" when no driver recognises it.
+std::string RasterDriverName(const std::string& path);
 // Reads one band (1-based) of a window into floats; the part of the window outside the
 // raster is filled with `fill`. Throws Error naming file, band and window on failure.
 ImageF ReadImageWindow(const std::string& path, int band, const PixelWindow& window,

@@ -1,4 +1,6 @@
 // Draco (.drc) and glTF binary with KHR_draco_mesh_compression (.glb), tile-local.
+#include <algorithm>
+#include <cmath>
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>
 #include <draco/core/decoder_buffer.h>
@@ -59,17 +61,28 @@ TriangleMesh FromDracoMesh(const std::string& path, const draco::Mesh& in) {
   const draco::PointAttribute* att = in.GetNamedAttribute(draco::GeometryAttribute::POSITION);
   SATMESH_CHECK(att != nullptr && att->num_components() == 3, ErrorCode::kInvalidInput,
                 path + ": Draco mesh has no 3-component position attribute");
+  // Numbers only: converting a bool attribute reads bytes as bool (undefined behaviour
+  // in Draco's ConvertTypedValue; found by fuzz_drc).
+  const draco::DataType type = att->data_type();
+  SATMESH_CHECK(type >= draco::DT_INT8 && type <= draco::DT_FLOAT64, ErrorCode::kInvalidInput,
+                path + ": Draco position attribute has data type " + std::to_string(int(type)) +
+                    ", not a number type");
   TriangleMesh mesh;
   mesh.vertices.resize(in.num_points());
   for (uint32_t p = 0; p < in.num_points(); ++p) {
     float xyz[3];
     const bool ok = att->ConvertValue<float, 3>(att->mapped_index(draco::PointIndex(p)), xyz);
-    if (!ok) ThrowError(ErrorCode::kInvalidInput, path + ": bad Draco position " + std::to_string(p));
+    if (!ok || !std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2]))
+      ThrowError(ErrorCode::kInvalidInput, path + ": bad Draco position " + std::to_string(p));
     mesh.vertices[p] = Eigen::Vector3f(xyz[0], xyz[1], xyz[2]);
   }
   mesh.faces.resize(in.num_faces());
   for (uint32_t f = 0; f < in.num_faces(); ++f) {
     const draco::Mesh::Face& face = in.face(draco::FaceIndex(f));
+    for (int k = 0; k < 3; ++k)
+      SATMESH_CHECK(face[k].value() < in.num_points(), ErrorCode::kInvalidInput,
+                    path + ": Draco face " + std::to_string(f) + " has vertex " +
+                        std::to_string(face[k].value()) + " of " + std::to_string(in.num_points()));
     mesh.faces[f] = Eigen::Vector3i(int(face[0].value()), int(face[1].value()), int(face[2].value()));
   }
   return mesh;
@@ -79,7 +92,43 @@ std::string BufferBytes(const draco::EncoderBuffer& buffer) {
   return std::string(buffer.data(), buffer.size());
 }
 
+// Draco (1.5) sizes its corner table from the face and vertex counts in the stream before
+// reading the symbols, so ~30 bytes claiming 2^28 faces allocate gigabytes (found by
+// fuzz_drc). Refuse counts the stream cannot encode: edgebreaker needs ~1 bit per face,
+// so 1000 faces or vertices per byte is far beyond any real file (our tiles: < 1 per byte).
+// Checked for the 2.2 bitstream that our writer and every Draco since 1.0 (2017) emit;
+// older bitstreams (fixed-size counts, found by fuzz_drc to allocate gigabytes too) are
+// refused.
+void CheckDracoCounts(const std::string& path, const char* data, size_t size) {
+  const auto* b = reinterpret_cast<const unsigned char*>(data);
+  if (size < 12 || std::string(data, 5) != "DRACO") return;  // Draco names what is wrong
+  SATMESH_CHECK(b[5] == 2 && b[6] == 2, ErrorCode::kInvalidInput,
+                "Draco data in " + path + ": bitstream version " + std::to_string(b[5]) + "." +
+                    std::to_string(b[6]) + " is not supported (2.2, written by Draco >= 1.0)");
+  if (b[7] != 1) return;  // a point cloud: no faces
+  if ((b[9] | (b[10] << 8)) & 0x8000) return;  // metadata precedes the connectivity
+  size_t at = b[8] == 1 ? 12 : 11;             // edgebreaker: a traversal-type byte first
+  // Edgebreaker: vertices, faces, (a byte), symbols, split symbols; sequential: faces, points.
+  const bool edgebreaker = b[8] == 1;
+  uint64_t counts[4] = {0, 0, 0, 0};
+  for (int k = 0; k < (edgebreaker ? 4 : 2); ++k) {
+    if (edgebreaker && k == 2) ++at;  // num_attribute_data
+    for (int shift = 0; at < size && shift < 35; shift += 7) {
+      counts[k] |= uint64_t(b[at] & 0x7f) << shift;
+      if (!(b[at++] & 0x80)) break;
+    }
+  }
+  const uint64_t limit = 1000 * uint64_t(size);
+  if (*std::max_element(counts, counts + 4) > limit)
+    ThrowError(ErrorCode::kInvalidInput,
+               "Draco data in " + path + ": stream of " + std::to_string(size) + " bytes declares " +
+                   std::to_string(counts[0]) + " and " + std::to_string(counts[1]) +
+                   " faces/vertices (or symbols " + std::to_string(counts[2]) + ", " +
+                   std::to_string(counts[3]) + "), more than it can encode");
+}
+
 TriangleMesh DecodeDracoBytes(const std::string& path, const char* data, size_t size) {
+  CheckDracoCounts(path, data, size);
   draco::DecoderBuffer buffer;
   buffer.Init(data, size);
   draco::Decoder decoder;

@@ -1,6 +1,10 @@
 #include "core/mesh/mesh_io.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -38,11 +42,19 @@ std::string ReadFileBytes(const std::string& path) {
 }
 
 void WriteFileBytes(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  SATMESH_CHECK(out.good(), ErrorCode::kIo, "cannot create mesh file " + path);
-  out.write(bytes.data(), std::streamsize(bytes.size()));
-  out.close();
-  SATMESH_CHECK(!out.fail(), ErrorCode::kIo, "cannot write mesh file " + path);
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) ThrowIoError("cannot create mesh file " + path, errno);
+  for (size_t written = 0; written < bytes.size();) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int error = n < 0 ? errno : ENOSPC;  // a 0-byte write: the device took nothing
+      ::close(fd);
+      ThrowIoError("cannot write mesh file " + path, error);
+    }
+    written += size_t(n);
+  }
+  if (::close(fd) != 0) ThrowIoError("cannot write mesh file " + path, errno);
 }
 
 void SetTileLocalVertices(const std::string& path, const std::vector<double>& xyz,

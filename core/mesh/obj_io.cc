@@ -1,4 +1,5 @@
 // Wavefront OBJ: v and f lines only (no materials, texture coordinates or normals).
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -115,7 +116,7 @@ void WriteObj(const std::string& path, const TriangleMesh& mesh) {
   }
   flush(true);
   out.close();
-  SATMESH_CHECK(!out.fail(), ErrorCode::kIo, "cannot write OBJ file " + path);
+  if (out.fail()) ThrowIoError("cannot write OBJ file " + path, errno);
 }
 
 }  // namespace satmesh::mesh_io_internal

@@ -1,4 +1,5 @@
 // PLY reader and writer (ascii, binary little/big endian).
+#include <cerrno>
 #include <algorithm>
 #include <bit>
 #include <charconv>
@@ -215,6 +216,12 @@ TriangleMesh ReadPly(const std::string& path) {
   long long num_vertices = -1;
   for (const PlyElement& element : header.elements) {
     const bool is_vertex = element.name == "vertex";
+    // Every row of an element with properties takes at least a byte; one without has no
+    // data to read (3.3e9 empty rows of an unknown element spun for minutes: fuzz_ply).
+    if (element.count > bytes.size())
+      Fail(path, "PLY header declares " + std::to_string(element.count) + " rows of an element '" +
+                     element.name + "', more than the file can hold (truncated?)");
+    if (element.properties.empty()) continue;
     // 0/1/2 for x/y/z, 3 for height_sigma, else -1
     std::vector<int> axis(element.properties.size());
     int found = 0;
@@ -265,6 +272,8 @@ TriangleMesh ReadPly(const std::string& path) {
             Fail(path, "PLY file is truncated: data ends in " + where());
           if (keep && (!std::isfinite(value) || value != std::floor(value)))
             Fail(path, "non-integer vertex index in " + where());
+          if (keep && std::abs(value) > 1e15)  // beyond long long's range: UB to convert
+            Fail(path, "vertex index " + std::to_string(value) + " out of range in " + where());
           corners[k] = keep ? (long long)value : 0;
         }
         if (keep)
@@ -335,7 +344,7 @@ void WritePly(const std::string& path, const TriangleMesh& mesh, const MeshWrite
   }
   flush(true);
   out.close();
-  SATMESH_CHECK(!out.fail(), ErrorCode::kIo, "cannot write PLY file " + path);
+  if (out.fail()) ThrowIoError("cannot write PLY file " + path, errno);
 }
 
 }  // namespace satmesh::mesh_io_internal

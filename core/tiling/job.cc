@@ -13,6 +13,7 @@
 #include "core/common/error.h"
 #include "core/common/threads.h"
 #include "core/refine/bias_estimation.h"
+#include "core/tiling/input_check.h"
 #include "core/tiling/tile_input.h"
 
 namespace satmesh {
@@ -98,6 +99,7 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
   const auto t_start = Clock::now();
   JobOutputs out;
   out.plan = PlanJob(spec);
+  CheckJobInputs(spec, out.plan);
   out.plan_s = Seconds(t_start);
   std::filesystem::create_directories(std::filesystem::path(out_dir) / "tiles");
 

@@ -27,6 +27,16 @@ GdalDatasetPtr OpenDsm(const std::string& path) {
   GdalDatasetPtr ds(GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
   SATMESH_CHECK(ds != nullptr, ErrorCode::kNotFound, "cannot open DSM '" + path + "'");
   SATMESH_CHECK(ds->GetRasterCount() >= 1, ErrorCode::kInvalidInput, "DSM '" + path + "' has no band");
+  // As for images (image_io.cc, CheckBlockSize): GDAL reads whole blocks of all
+  // pixel-interleaved bands; a forged header must not make it allocate gigabytes.
+  int bx = 0, by = 0;
+  ds->GetRasterBand(1)->GetBlockSize(&bx, &by);
+  const char* interleave = ds->GetMetadataItem("INTERLEAVE", "IMAGE_STRUCTURE");
+  const int samples = interleave && std::string(interleave) == "PIXEL" ? ds->GetRasterCount() : 1;
+  const double block_mb = double(bx) * by * samples * 8 / (1 << 20);
+  SATMESH_CHECK(block_mb <= 256, ErrorCode::kInvalidInput,
+                "DSM '" + path + "': one block of " + std::to_string(bx) + "x" + std::to_string(by) + " x " +
+                    std::to_string(samples) + " interleaved bands is too large to read (at most 256 MB)");
   return ds;
 }
 
@@ -194,7 +204,10 @@ JobPlan PlanJob(const JobSpec& spec) {
   plan.dsm = ReadDsmGrid(spec.initial_dsm);
   SATMESH_CHECK(!plan.dsm.crs_wkt.empty() && !CrsIsGeographic(plan.dsm.crs_wkt),
                 ErrorCode::kInvalidInput,
-                "initial DSM '" + spec.initial_dsm + "': tiling needs a projected CRS (metres)");
+                "initial.dsm: '" + spec.initial_dsm + "' is " +
+                    (plan.dsm.crs_wkt.empty() ? std::string("without a CRS")
+                                              : "in a geographic CRS (degrees)") +
+                    "; satmesh needs a projected CRS in metres (e.g. UTM: gdalwarp -t_srs EPSG:326zz)");
   CheckCrs("outputs.crs", spec.output_crs, plan.dsm.crs_wkt);
   CheckCrs("aoi.crs", spec.aoi.crs, plan.dsm.crs_wkt);
   plan.output_crs = spec.output_crs.empty() ? plan.dsm.crs_wkt : spec.output_crs;

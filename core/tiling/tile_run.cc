@@ -46,11 +46,18 @@ std::vector<Eigen::Vector3d> Transformed(std::vector<Eigen::Vector3d> points, co
   return points;
 }
 
-// Writes through a temporary name in the same folder, then renames (atomic on POSIX).
+// Writes through a temporary name in the same folder, then renames (atomic on POSIX); a
+// failed write (a full disk) leaves neither a partial file nor the temporary behind.
 template <typename WriteFn>
 void WriteAtomically(const fs::path& path, WriteFn write) {
   const fs::path tmp = path.parent_path() / (path.stem().string() + ".part" + path.extension().string());
-  write(tmp.string());
+  try {
+    write(tmp.string());
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw;
+  }
   fs::rename(tmp, path);
 }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <functional>
 #include <fstream>
 
 #include "core/mesh/mesh_io.h"
@@ -180,6 +181,50 @@ TEST(EndToEnd, MultiTileMetricsAreFilledAsInProcess) {
   EXPECT_NEAR(served["levels"].back()["mean_zncc_end"].get<double>(),
               expected["levels"].back()["mean_zncc_end"].get<double>(), 1e-4);
   EXPECT_GT(expected["totals"]["peak_rss_mb"].get<double>(), 10.0);
+  server.Stop();
+}
+
+// Bad data is refused at submission with 422 and the checker's message (core/tiling/
+// input_check.h, tested case by case in tests/core/tiling/input_check_test.cc); no job is made.
+TEST(EndToEnd, BadDataIsRefusedAtSubmissionNamingFieldAndFile) {
+  const std::string dir = TempDir("e2e_bad");
+  const std::string scene = dir + "/scene";
+  synth::SynthOptions o = synth::SynthPreset("small", /*seed=*/1);
+  o.city.aoi_size_m = 24;
+  o.city.ground_margin_m = 20;
+  o.city.building_margin_m = 4;
+  o.render.supersample = 1;
+  o.write_preview = false;
+  synth::GenerateScene(scene, o);
+  const json job = ReadJsonFile(scene + "/job.json");
+  const std::string first = job["images"][0]["href"];
+  std::filesystem::copy_file(scene + "/" + first, scene + "/truncated.tif");
+  std::filesystem::resize_file(scene + "/truncated.tif", std::filesystem::file_size(scene + "/truncated.tif") / 3);
+
+  RealExecutor executor;
+  ServerOptions options;
+  options.port = 0;
+  options.data_dir = dir + "/data";
+  options.inputs.data_roots = {scene};
+  options.scheduler.workers = 1;
+  ApiServer server(options, &executor);
+  httplib::Client c("127.0.0.1", server.Start());
+  c.set_read_timeout(30, 0);
+  const std::vector<std::pair<std::function<void(json&)>, std::string>> cases = {
+      {[&](json& j) { j["images"].push_back(j["images"][0]); }, "images[3].href: '"},
+      {[&](json& j) { j["images"][1]["href"] = "truncated.tif"; }, "images[1].href: '"}};
+  const std::vector<std::string> why = {"is the same file as images[0].href", "(truncated or corrupt file?)"};
+  for (size_t k = 0; k < cases.size(); ++k) {
+    json bad = job;
+    cases[k].first(bad);
+    auto r = c.Post("/processes/refine-mesh/execution", bad.dump(), "application/json");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 422) << r->body;
+    const std::string detail = Json(r).value("detail", "");
+    EXPECT_NE(detail.find(cases[k].second), std::string::npos) << detail;
+    EXPECT_NE(detail.find(why[k]), std::string::npos) << detail;
+  }
+  EXPECT_TRUE(Json(c.Get("/jobs"))["jobs"].empty());
   server.Stop();
 }
 

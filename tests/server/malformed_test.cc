@@ -70,6 +70,9 @@ std::vector<Case> Cases(const std::string& job_id) {
       {"POST", exec, With([](json& j) { j["images"][0]["href"] = "/vsis3/bucket/a.tif"; }), 403, "images[0].href"},
       {"POST", exec, With([](json& j) { j["images"][0]["href"] = "sub"; }), 400, "images[0].href"},
       {"POST", exec, With([](json& j) { for (int i = 0; i < 8; ++i) j["images"].push_back({{"href", "a.tif"}}); }), 400, "limit of 8"},
+      {"POST", exec, With([](json& j) {  // 500 images: refused before any href is looked up
+         for (int i = 2; i < 500; ++i) j["images"].push_back({{"href", "missing_" + std::to_string(i) + ".tif"}});
+       }), 400, "images: 500 images exceed this server's limit of 8"},
       {"POST", exec, std::string(2 << 20, ' '), 413, ""},
       {"POST", exec, Job().dump(), 415, "Content-Type", "text/plain"},
       {"POST", "/processes/nope/execution", Job().dump(), 404, "nope"},
@@ -88,6 +91,19 @@ std::vector<Case> Cases(const std::string& job_id) {
       {"GET", "/jobs/" + job_id + "/results/job.json", "", 404, ""},
       {"GET", "/jobs/" + job_id + "/results/state.json", "", 404, ""},
       {"GET", "/no/such/route", "", 404, ""},
+      // Paths from the request line (RELIABILITY.md): encoded traversal out of the viewer's
+      // static mount or into the job store, NUL bytes, a job id that is a path.
+      {"GET", "/viewer/Cesium/..%2f..%2f..%2f..%2f..%2f..%2fetc%2fpasswd", "", 404, ""},
+      {"GET", "/viewer/Cesium/%2e%2e/%2e%2e/%2e%2e/%2e%2e/%2e%2e/etc/passwd", "", 404, ""},
+      {"GET", "/viewer/Cesium/Cesium.js%00.html", "", 400, "NUL byte"},  // was Cesium.js as text/html
+      {"GET", "/jobs/..%2f..%2fjobs%2f" + job_id + "/results/job.json", "", 404, ""},
+      {"GET", "/jobs/%2e%2e", "", 404, "no job with id '..'"},
+      // Invalid UTF-8 in the path: the 404's detail could not be serialised and the error
+      // handler's exception terminated the server (fuzz_http); now U+FFFD stands in.
+      {"GET", "/jobs/" + job_id + "/tiles/0_0.g%FF%FE%FF.glb", "", 404, "/tiles/0_0.g\xEF\xBF\xBD"},
+      {"GET", "/no/%C3%28/route", "", 404, "GET /no/\xEF\xBF\xBD(/route"},
+      {"GET", "/jobs/" + job_id + "%00/results/tileset.json", "", 400, "NUL byte"},
+      {"DELETE", "/jobs/%2e%2e%2f" + job_id, "", 404, "DELETE /jobs/../" + job_id + ": HTTP 404"},  // no route: the job lives on
   };
   return c;
 }

@@ -1,7 +1,10 @@
 // Units without HTTP: problem mapping, href policy, store round trip.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <filesystem>
+#include <fstream>
 
 #include "core/common/error.h"
 #include "server/inputs.h"
@@ -63,6 +66,65 @@ TEST(ResolveHrefs, RelativeUnderRootSymlinkEscapeAndVirtualPaths) {
   }
   nlohmann::json missing = job("in/none.tif");
   EXPECT_EQ(StatusOf([&] { ResolveHrefs(&missing, policy); }), 400);
+}
+
+// The security review of paths from requests (RELIABILITY.md): each hostile href is
+// refused with the status and reason given, and none reaches GDAL or a file outside.
+TEST(ResolveHrefs, HostileHrefsAreRefusedWithTheReason) {
+  namespace fs = std::filesystem;
+  const std::string dir = testing::TempDir("hostile");
+  fs::create_directories(dir + "/root/in");
+  fs::create_directories(dir + "/root2");
+  std::ofstream(dir + "/root/in/a.tif") << "a";
+  std::ofstream(dir + "/root2/a.tif") << "a";
+  std::ofstream(dir + "/root/in/etc.vrt")
+      << "<VRTDataset rasterXSize=\"1\" rasterYSize=\"1\"><VRTRasterBand dataType=\"Byte\" band=\"1\">"
+         "<SimpleSource><SourceFilename>/etc/passwd</SourceFilename></SimpleSource></VRTRasterBand></VRTDataset>";
+  ASSERT_EQ(::mkfifo((dir + "/root/in/fifo.tif").c_str(), 0600), 0);  // GDAL would block on it
+  InputPolicy policy;
+  policy.data_roots = {dir + "/root"};
+  policy.allowed_vsi = {"/vsicurl/https://data.example.com/pub/"};
+  struct Case {
+    std::string href;
+    int status;
+    std::string reason;
+  };
+  const std::vector<Case> cases = {
+      {std::string("in/a.tif\0.png", 13), 403, "contains a NUL byte"},
+      {"in/../../root2/a.tif", 403, "'..' is not allowed"},
+      {dir + "/root2/a.tif", 403, "outside the server's data roots"},  // a sibling sharing the root's prefix
+      {"%2e%2e/root2/a.tif", 400, "does not exist"},  // no URL decoding of local paths: a literal name
+      {"/vsicurl/https://data.example.com/pub/%2E%2e/private/x.tif", 403, "encoded dots, slashes or backslashes"},
+      {"/vsicurl/https://data.example.com/pub/..%2fprivate/x.tif", 403, "encoded dots, slashes or backslashes"},
+      {"/vsicurl/https://data.example.com/pub/..%5Cprivate/x.tif", 403, "encoded dots, slashes or backslashes"},
+      {"/vsicurl/https://data.example.com/pub/..\\private/x.tif", 403, "encoded dots, slashes or backslashes"},
+      {"/vsicurl/https://data.example.com/pub/../private/x.tif", 403, "'..' is not allowed"},
+      {"/vsicurl/https://data.example.com/private/x.tif", 403, "is not allowed by this server"},
+      {"/vsicurl?url=https://data.example.com/pub/x.tif", 403, "is not allowed by this server"},
+      {"/vsimem/x.tif", 403, "is not allowed by this server"},
+      {"/vsistdin/", 403, "is not allowed by this server"},
+      {"/vsizip//vsicurl/https://data.example.com/pub/x.zip/a.tif", 403, "is not allowed by this server"},
+      {"in/etc.vrt", 403, "is a VRT file; inputs must be a self-contained raster format"},
+      {"in/fifo.tif", 400, "is not a file"},
+      {".", 400, "is not a file"},
+  };
+  for (const Case& k : cases) {
+    nlohmann::json job{{"images", {{{"href", k.href}}}}};
+    int status = 0;
+    std::string detail;
+    try {
+      ResolveHrefs(&job, policy);
+    } catch (...) {
+      const Problem p = ProblemFromException(std::current_exception());
+      status = p.status;
+      detail = p.body.value("detail", "");
+    }
+    EXPECT_EQ(status, k.status) << k.href << ": " << detail;
+    EXPECT_NE(detail.find(k.reason), std::string::npos) << k.href << ": " << detail;
+    EXPECT_EQ(detail.rfind("images[0].href: ", 0), 0u) << detail;
+  }
+  policy.allowed_vsi = {"/vsicurl/https://data.example.com"};  // would also allow data.example.com.evil
+  EXPECT_NE(policy.Check().find("must start with /vsi and end with '/'"), std::string::npos) << policy.Check();
 }
 
 TEST(JobStore, StateRoundTripAndRunningTilesReload) {
