@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -116,6 +117,20 @@ std::vector<VertexScalar> ViewerScalars(const PointMesh& piece_dsm, const std::v
     scalars.push_back(std::move(confidence));
   }
   return scalars;
+}
+
+// The debris thresholds of a tile's piece: 1 mm, or two steps of the .glb's Draco
+// position quantisation (the piece's extent / (2^bits - 1)) where those are coarser, so
+// no two vertices and no face collapse there either.
+MeshCleanOptions PieceCleanOptions(const PointMesh& padded, const Box2d& core) {
+  double zmin = 1e300, zmax = -1e300;
+  for (const auto& p : padded.points) zmin = std::min(zmin, p.z()), zmax = std::max(zmax, p.z());
+  const double extent = std::max({core.width(), core.height(), zmax - zmin});
+  const double step = extent / double((1 << MeshWriteOptions{}.draco_position_bits) - 1);
+  MeshCleanOptions options;
+  options.merge_distance_m = std::max(options.merge_distance_m, 2 * step);
+  options.min_face_height_m = std::max(options.min_face_height_m, 2 * step);
+  return options;
 }
 
 // Writes the trimmed piece: PLY in the output CRS, GLB in the tile's ENU frame (with
@@ -236,7 +251,7 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
                       [&](const std::string& p) { WriteDsm(p, confidence); });
     }
 
-    const PointMesh piece = ClipToBox(padded, tile.core);
+    const PointMesh piece = ClipToBox(padded, tile.core, PieceCleanOptions(padded, tile.core));
     SATMESH_CHECK(!piece.faces.empty(), ErrorCode::kInvalidInput,
                   "tile " + tile.Name() + ": no refined surface inside the tile's core");
     WritePiece(piece, tile, plan, ReadDsmWindow(spec.initial_dsm, tile.padded_cells), out_dir, &r);
