@@ -162,15 +162,24 @@ JobSpec JobSpecFromJson(const json& job, const std::string& base_dir) {
   }
   if (!job.contains("initial")) Bad("initial", "required");
   Object(job["initial"], "initial");
-  CheckKeys(job["initial"], "initial", {"dsm", "fill_holes_m"});
-  if (!job["initial"].contains("dsm")) Bad("initial.dsm", "required");
-  spec.initial_dsm = Resolve(String(job["initial"]["dsm"], "initial.dsm"), base_dir);
-  if (job["initial"].contains("fill_holes_m"))
-    spec.fill_holes_m = Number(job["initial"]["fill_holes_m"], "initial.fill_holes_m");
+  const json& initial = job["initial"];
+  CheckKeys(initial, "initial", {"dsm", "mesh", "crs", "fill_holes_m"});
+  if (!initial.contains("dsm") && !initial.contains("mesh")) Bad("initial", "needs dsm or mesh (or both)");
+  if (initial.contains("dsm")) spec.initial_dsm = Resolve(String(initial["dsm"], "initial.dsm"), base_dir);
+  if (initial.contains("mesh"))
+    spec.initial_mesh.path = Resolve(String(initial["mesh"], "initial.mesh"), base_dir);
+  if (initial.contains("crs")) {
+    if (!initial.contains("mesh")) Bad("initial.crs", "is the initial mesh's CRS; there is no initial.mesh");
+    spec.initial_mesh.crs = String(initial["crs"], "initial.crs");
+  }
+  if (initial.contains("fill_holes_m"))
+    spec.fill_holes_m = Number(initial["fill_holes_m"], "initial.fill_holes_m");
   if (job.contains("outputs")) {
     Object(job["outputs"], "outputs");
-    CheckKeys(job["outputs"], "outputs", {"crs"});
+    CheckKeys(job["outputs"], "outputs", {"crs", "dsm_resolution_m"});
     if (job["outputs"].contains("crs")) spec.output_crs = String(job["outputs"]["crs"], "outputs.crs");
+    if (job["outputs"].contains("dsm_resolution_m"))
+      spec.dsm_resolution_m = Number(job["outputs"]["dsm_resolution_m"], "outputs.dsm_resolution_m");
   }
   if (job.contains("aoi")) ParseAoi(job["aoi"], &spec.aoi);
   if (job.contains("tiling")) ParseTiling(job["tiling"], &spec.tiling);

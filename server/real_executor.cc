@@ -81,7 +81,7 @@ ExecutionPlan RealExecutor::Plan(const JobSpec& spec) {
     const RasterInfo info = InfoFor(spec.images[i].path, "images[" + std::to_string(i) + "].href");
     plan.pixels += int64_t(info.width) * info.height;
   }
-  InfoFor(spec.initial_dsm, "initial.dsm");
+  if (!spec.initial_dsm.empty()) InfoFor(spec.initial_dsm, "initial.dsm");
   for (const PlannedTile& tile : PlanJob(spec).tiles) plan.tiles.push_back({tile.x, tile.y});
   return plan;
 }

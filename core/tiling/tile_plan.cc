@@ -8,10 +8,14 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
+#include <utility>
 
 #include "core/common/error.h"
 #include "core/common/gdal_init.h"
 #include "core/geo/crs.h"
+#include "core/refine/view_setup.h"
+#include "core/tiling/initial_mesh.h"
 #include "core/tiling/memory_budget.h"
 
 namespace satmesh {
@@ -82,10 +86,59 @@ PixelWindow Intersect(const PixelWindow& w, int width, int height) {
   return out;
 }
 
+// The height range of the mesh's points over `box` (+-inf when none).
+std::pair<double, double> HeightsOver(const InitialMesh& mesh, const Box2d& box) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& p : mesh.mesh.points)
+    if (box.Contains(p.x(), p.y())) lo = std::min(lo, p.z()), hi = std::max(hi, p.z());
+  return {lo, hi};
+}
+
+// The mesh must be where the images look: its centre inside an image (with its height
+// within the RPC's height range), else the mesh is elsewhere or its CRS is wrong.
+void CheckMeshSeenByImages(const InitialMesh& mesh, const std::vector<ImageFootprintModel>& images) {
+  const Eigen::Vector3d center =
+      CrsTransform(mesh.crs, kWgs84Geographic3D).Apply(0.5 * (mesh.min + mesh.max));
+  for (const ImageFootprintModel& image : images) {
+    const RpcCoefficients& c = image.rpc.coefficients();
+    if (std::abs(center.z() - c.height_off) > 1.5 * std::abs(c.height_scale)) continue;
+    const Eigen::Vector2d px = image.rpc.PixelFromGeo(center);
+    if (px.x() >= 0 && px.y() >= 0 && px.x() <= image.info.width && px.y() <= image.info.height) return;
+  }
+  char where[160];
+  std::snprintf(where, sizeof where, "lon %.6f, lat %.6f, h %.1f m", center.x(), center.y(), center.z());
+  ThrowError(ErrorCode::kInvalidInput, "initial.mesh '" + mesh.file + "': outside the images' footprint (its centre at " +
+                                           where + " is in none of the " + std::to_string(images.size()) +
+                                           " images or outside their RPCs' height range); wrong initial.crs?");
+}
+
+// A mesh job's grid: north-up cells of spec.dsm_resolution_m (0: the images' median GSD
+// at the mesh's centre) over the mesh's extent in its (planning) CRS, on multiples of
+// the cell.
+DsmGrid MeshGrid(const JobSpec& spec, const InitialMesh& mesh, const std::vector<ImageFootprintModel>& images) {
+  double cell = spec.dsm_resolution_m;
+  if (cell == 0) {
+    const LocalFrame frame(CrsTransform(mesh.crs, kWgs84Geographic3D).Apply(0.5 * (mesh.min + mesh.max)));
+    std::vector<double> gsd;
+    for (const ImageFootprintModel& image : images) gsd.push_back(GroundSamplingDistance(image.rpc, frame));
+    SATMESH_CHECK(!gsd.empty(), ErrorCode::kInvalidInput, "images: none could be read for the grid's GSD");
+    std::nth_element(gsd.begin(), gsd.begin() + gsd.size() / 2, gsd.end());
+    cell = gsd[gsd.size() / 2];
+  }
+  DsmGrid grid;
+  grid.crs_wkt = mesh.crs;
+  const double x0 = std::floor(mesh.min.x() / cell) * cell, y1 = std::ceil(mesh.max.y() / cell) * cell;
+  grid.width = std::max(1, int(std::ceil((mesh.max.x() - x0) / cell)));
+  grid.height = std::max(1, int(std::ceil((y1 - mesh.min.y()) / cell)));
+  grid.geo_transform = {x0, cell, 0, y1, 0, -cell};
+  spdlog::info("plan: grid of {}x{} cells of {:.3f} m over the initial mesh", grid.width, grid.height, cell);
+  return grid;
+}
+
 // The tile grid over the AOI's cells, tiles of `tile_cells` cells, x from the west, y
 // from the south; each tile's memory estimated.
 void CutTiles(const JobSpec& spec, const std::vector<ImageFootprintModel>& images,
-              int tile_cells, JobPlan* plan_out) {
+              const std::optional<InitialMesh>& mesh, int tile_cells, JobPlan* plan_out) {
   JobPlan& plan = *plan_out;
   plan.tile_cells = tile_cells;
   plan.tiles.clear();
@@ -110,7 +163,9 @@ void CutTiles(const JobSpec& spec, const std::vector<ImageFootprintModel>& image
       tile.core = plan.dsm.BoxOf(tile.core_cells);
       tile.padded = plan.dsm.BoxOf(tile.padded_cells);
       if (!spec.aoi.polygon.empty() && !MakePolygon(BoxRing(tile.core))->Intersects(aoi.get())) continue;
-      tile.memory = EstimateTileMemory(spec, plan.dsm, images, tile.padded_cells);
+      std::pair<double, double> heights;
+      if (mesh) heights = HeightsOver(*mesh, tile.padded);
+      tile.memory = EstimateTileMemory(spec, plan.dsm, images, tile.padded_cells, mesh ? &heights : nullptr);
       plan.tiles.push_back(tile);
     }
   }
@@ -191,13 +246,27 @@ JobPlan PlanJob(const JobSpec& spec) {
   const std::string problem = spec.Check();
   SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "job: " + problem);
   JobPlan plan;
-  plan.dsm = ReadDsmGrid(spec.initial_dsm);
-  SATMESH_CHECK(!plan.dsm.crs_wkt.empty() && !CrsIsGeographic(plan.dsm.crs_wkt),
-                ErrorCode::kInvalidInput,
-                "initial DSM '" + spec.initial_dsm + "': tiling needs a projected CRS (metres)");
+  const std::vector<ImageFootprintModel> images = ReadImageFootprintModels(spec);
+  std::optional<InitialMesh> mesh;
+  if (!spec.initial_mesh.path.empty()) {
+    if (!spec.output_crs.empty()) CheckCrs("outputs.crs", spec.output_crs, kWgs84Geographic3D);
+    mesh = ReadInitialMesh(spec);
+  }
+  if (!spec.initial_dsm.empty()) {
+    plan.dsm = ReadDsmGrid(spec.initial_dsm);
+    SATMESH_CHECK(!plan.dsm.crs_wkt.empty() && !CrsIsGeographic(plan.dsm.crs_wkt),
+                  ErrorCode::kInvalidInput,
+                  "initial DSM '" + spec.initial_dsm + "': tiling needs a projected CRS (metres)");
+  }
+  const std::string source_crs = mesh ? mesh->crs : plan.dsm.crs_wkt;
+  if (mesh) {
+    mesh = InitialMeshIn(*mesh, spec.initial_dsm.empty() ? MeshPlanCrs(spec, *mesh) : plan.dsm.crs_wkt);
+    CheckMeshSeenByImages(*mesh, images);
+    if (spec.initial_dsm.empty()) plan.dsm = MeshGrid(spec, *mesh, images);
+  }
   CheckCrs("outputs.crs", spec.output_crs, plan.dsm.crs_wkt);
   CheckCrs("aoi.crs", spec.aoi.crs, plan.dsm.crs_wkt);
-  plan.output_crs = spec.output_crs.empty() ? plan.dsm.crs_wkt : spec.output_crs;
+  plan.output_crs = spec.output_crs.empty() ? CrsToWkt(source_crs) : spec.output_crs;
   const auto& gt = plan.dsm.geo_transform;
   const double cell = gt[1];
   const PixelWindow all{0, 0, plan.dsm.width, plan.dsm.height};
@@ -214,13 +283,14 @@ JobPlan PlanJob(const JobSpec& spec) {
   const int r0 = int(std::ceil((ymax - gt[3]) / gt[5] - 0.5)), r1 = int(std::floor((ymin - gt[3]) / gt[5] - 0.5)) + 1;
   plan.aoi_cells = Intersect(PixelWindow{c0, r0, c1 - c0, r1 - r0}, plan.dsm.width, plan.dsm.height);
   SATMESH_CHECK(plan.aoi_cells.width > 0 && plan.aoi_cells.height > 0, ErrorCode::kInvalidInput,
-                "aoi: does not overlap the initial DSM '" + spec.initial_dsm + "'");
+                spec.initial_dsm.empty()
+                    ? "initial.mesh '" + mesh->file + "': outside the aoi"
+                    : "aoi: does not overlap the initial DSM '" + spec.initial_dsm + "'");
 
   plan.overlap_cells = int(std::ceil(spec.tiling.overlap_m / cell - 1e-9));
   plan.memory_budget_mb = MemoryBudgetMb(spec.tiling);
-  const std::vector<ImageFootprintModel> images = ReadImageFootprintModels(spec);
   const PixelWindow& a = plan.aoi_cells;
-  CutTiles(spec, images, spec.tiling.tile_size_m > 0
+  CutTiles(spec, images, mesh, spec.tiling.tile_size_m > 0
                              ? std::max(1, int(std::lround(spec.tiling.tile_size_m / cell)))
                              : std::max(a.width, a.height),
            &plan);
@@ -246,7 +316,7 @@ JobPlan PlanJob(const JobSpec& spec) {
                    "tiles of {} cells", worst->Name(), worst->memory.peak_mb,
                    plan.memory_budget_mb, cells);
       plan.auto_tiled = true;
-      CutTiles(spec, images, cells, &plan);
+      CutTiles(spec, images, mesh, cells, &plan);
     }
   }
   double worst_mb = 0, worst_px = 0;

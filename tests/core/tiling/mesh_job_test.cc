@@ -3,11 +3,14 @@
 // truth mesh), chaining a result, and bad meshes refused naming file and problem.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <string>
 
 #include <unistd.h>
 
+#include "core/dsm/dsm.h"
 #include "core/mesh/mesh_clean.h"
 #include "core/mesh/mesh_io.h"
 #include "core/synth/scene_writer.h"
@@ -62,6 +65,13 @@ class MeshJob : public ::testing::Test {
           << entry.path();
     }
   }
+  // The scene's area (the initial DSM's extent), where the images look.
+  static std::vector<Eigen::Vector2d> SceneAoi() {
+    const Dsm dsm = ReadDsm(scene_ + "/initial/dsm.tif");
+    const double x0 = dsm.geo_transform[0], y1 = dsm.geo_transform[3];
+    const double x1 = x0 + dsm.width * dsm.geo_transform[1], y0 = y1 + dsm.height * dsm.geo_transform[5];
+    return {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+  }
   static std::string scene_;
 };
 std::string MeshJob::scene_;
@@ -74,6 +84,48 @@ TEST_F(MeshJob, ManyTilesFromTheDsmLeaveNoDebris) {
   ASSERT_EQ(o.tiles.size(), 16u);
   EXPECT_EQ(o.assembly.tiles_ok, 16);
   ExpectNoDebris(out);
+}
+
+}  // namespace
+}  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+// The median |refined - truth| over the truth DSM's cells where both have a surface.
+double MedianAbsDsmError(const std::string& result_dsm, const std::string& truth_dsm) {
+  const Dsm result = ReadDsm(result_dsm), truth = ReadDsm(truth_dsm);
+  std::vector<double> diffs;
+  for (int j = 0; j < truth.height; ++j)
+    for (int i = 0; i < truth.width; ++i) {
+      const double x = truth.geo_transform[0] + (i + 0.5) * truth.geo_transform[1];
+      const double y = truth.geo_transform[3] + (j + 0.5) * truth.geo_transform[5];
+      const int ri = int(std::floor((x - result.geo_transform[0]) / result.geo_transform[1]));
+      const int rj = int(std::floor((y - result.geo_transform[3]) / result.geo_transform[5]));
+      if (ri < 0 || rj < 0 || ri >= result.width || rj >= result.height) continue;
+      const float a = result.at(ri, rj), b = truth.at(i, j);
+      if (std::isfinite(a) && std::isfinite(b)) diffs.push_back(std::abs(double(a) - b));
+    }
+  if (diffs.empty()) return INFINITY;
+  std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
+  return diffs[diffs.size() / 2];
+}
+
+TEST_F(MeshJob, StartsFromTheTruthMeshAndKeepsIt) {
+  JobSpec spec = Spec();
+  spec.initial_dsm.clear();
+  spec.initial_mesh.path = scene_ + "/truth/mesh.ply";
+  spec.tiling.tile_size_m = 18;  // 2 x 2 over the images' area (the mesh has 45 m more ground)
+  spec.aoi.polygon = SceneAoi();
+  const std::string out = OutDir("truth_start");
+  const JobOutputs o = RunJob(spec, out);
+  EXPECT_EQ(o.assembly.tiles_failed, 0);
+  ASSERT_GE(o.tiles.size(), 4u);
+  for (const auto& t : o.tiles) EXPECT_TRUE(t.ok) << t.name << ": " << t.error;
+  // The grid: the images' GSD (the scene's 0.3 m) over the mesh.
+  EXPECT_NEAR(o.plan.dsm.geo_transform[1], 0.3, 0.03);
+  ExpectNoDebris(out);
+  EXPECT_LT(MedianAbsDsmError(o.dsm_path, scene_ + "/truth/dsm.tif"), 0.1);
 }
 
 }  // namespace
