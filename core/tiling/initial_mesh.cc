@@ -61,11 +61,7 @@ InitialMesh ReadInitialMesh(const JobSpec& spec) {
   } catch (const Error& e) {
     ThrowError(ErrorCode::kInvalidArgument, "initial.crs: '" + out.crs + "' is not a usable CRS (" + e.what() + ")");
   }
-  ValidateMesh(mesh, Where(out));  // ReadMesh's formats check it too; the repair needs it
-  out.repaired = CleanMesh(&mesh);
-  if (out.repaired.Total() > 0) spdlog::info("{}: repaired: {}", Where(out), out.repaired.ToString());
-  SATMESH_CHECK(!mesh.faces.empty(), ErrorCode::kInvalidInput,
-                Where(out) + ": no face left after removing degenerate ones (" + out.repaired.ToString() + ")");
+  ValidateMesh(mesh, Where(out));  // ReadMesh's formats check it too
   out.mesh.faces = std::move(mesh.faces);
   out.mesh.points.reserve(mesh.vertices.size());
   for (size_t i = 0; i < mesh.vertices.size(); ++i) out.mesh.points.push_back(mesh.AbsoluteVertex(i));
@@ -104,6 +100,11 @@ InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs) {
                 Where(mesh) + ": its faces point down (" + std::to_string(int(100 * down / (up + down))) +
                     "% of the area seen from above; expected counter-clockwise faces seen from "
                     "outside): flip its orientation");
+  // The repair in metres (the file's units may be degrees).
+  out.mesh = CleanPointMesh(out.mesh, {}, &out.repaired);
+  if (out.repaired.Total() > 0) spdlog::info("{}: repaired: {}", Where(out), out.repaired.ToString());
+  SATMESH_CHECK(!out.mesh.faces.empty(), ErrorCode::kInvalidInput,
+                Where(out) + ": no face left after removing degenerate ones (" + out.repaired.ToString() + ")");
   BoundingBox(&out);
   return out;
 }

@@ -25,21 +25,23 @@ struct InitialMesh {
 };
 
 // Reads the mesh in its own CRS (spec.initial_mesh.crs, else the file's, else
-// spec.output_crs) and repairs it: close vertices merged, degenerate and duplicate faces
-// and unreferenced vertices dropped (non-manifold faces are dropped later by the coarse
-// remeshing, CoarseMeshOptions). Throws Error naming "initial.mesh" and the file:
-// kNotFound (missing), kInvalidInput (unreadable, NaN coordinates, zero faces, nothing
-// left after the repair), kInvalidArgument (more than spec.initial_mesh.max_faces faces;
-// no CRS or an unknown one, naming "initial.crs").
+// spec.output_crs). Throws Error naming "initial.mesh" and the file: kNotFound
+// (missing), kInvalidInput (unreadable, NaN coordinates, zero faces), kInvalidArgument
+// (more than spec.initial_mesh.max_faces faces; no CRS or an unknown one, naming
+// "initial.crs"). PLY/OBJ keep coordinates as floats about the bounding box's centre
+// rounded to units: in degrees (EPSG:4326) that is ~3 mm.
 InitialMesh ReadInitialMesh(const JobSpec& spec);
 
 // The planning CRS of a job whose grid the mesh gives: outputs.crs if projected, else the
 // mesh's if projected, else the UTM zone at the mesh's centre (geographic or ECEF meshes).
 std::string MeshPlanCrs(const JobSpec& spec, const InitialMesh& mesh);
 
-// The mesh in `crs` (x, y on the map, z ellipsoidal height). Throws Error{kInvalidInput}
-// naming the file when a point does not transform, or when the surface faces down (its
-// faces' net area seen from above is negative: inverted orientation).
+// The mesh in `crs` (x, y on the map, z ellipsoidal height; projected), repaired there
+// (CleanMesh in metres: close vertices merged, degenerate and duplicate faces and
+// unreferenced vertices dropped; non-manifold faces are dropped later by the coarse
+// remeshing). Throws Error{kInvalidInput} naming the file when a point does not
+// transform, when nothing is left after the repair, or when the surface faces down
+// (more than twice as much area faces down as up, seen from above: inverted orientation).
 InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs);
 
 // The part of `mesh` (in the plan's CRS) inside `box`, debris-free (ClipToBox).
