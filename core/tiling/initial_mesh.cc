@@ -44,10 +44,10 @@ InitialMesh ReadInitialMesh(const JobSpec& spec) {
   try {
     mesh = ReadMesh(out.file);
   } catch (const Error& e) {
-    ThrowError(e.code() == ErrorCode::kNotFound ? e.code() : ErrorCode::kInvalidInput,
+    ThrowError(e.code() == ErrorCode::kNotFound ? e.code() : ErrorCode::kInvalidArgument,
                Where(out) + ": cannot be read: " + e.what());
   }
-  SATMESH_CHECK(!mesh.faces.empty(), ErrorCode::kInvalidInput, Where(out) + ": has no faces");
+  SATMESH_CHECK(!mesh.faces.empty(), ErrorCode::kInvalidArgument, Where(out) + ": has no faces");
   SATMESH_CHECK(mesh.faces.size() <= spec.initial_mesh.max_faces, ErrorCode::kInvalidArgument,
                 Where(out) + ": " + std::to_string(mesh.faces.size()) + " faces, more than the limit of " +
                     std::to_string(spec.initial_mesh.max_faces));
@@ -84,7 +84,7 @@ InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs) {
   try {
     CrsTransform(mesh.crs, crs).Apply(&out.mesh.points);
   } catch (const Error& e) {
-    ThrowError(ErrorCode::kInvalidInput, Where(mesh) + ": does not transform from its CRS '" +
+    ThrowError(ErrorCode::kInvalidArgument, Where(mesh) + ": does not transform from its CRS '" +
                                              mesh.crs + "' (" + e.what() + "); wrong initial.crs?");
   }
   // Seen from above, a surface's up-facing area exceeds its down-facing area (walls count
@@ -96,14 +96,14 @@ InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs) {
     const double z = (p[f[1]] - p[f[0]]).cross(p[f[2]] - p[f[0]]).z();
     (z > 0 ? up : down) += std::abs(z);
   }
-  SATMESH_CHECK(down <= 2 * up, ErrorCode::kInvalidInput,
+  SATMESH_CHECK(down <= 2 * up, ErrorCode::kInvalidArgument,
                 Where(mesh) + ": its faces point down (" + std::to_string(int(100 * down / (up + down))) +
                     "% of the area seen from above; expected counter-clockwise faces seen from "
                     "outside): flip its orientation");
   // The repair in metres (the file's units may be degrees).
   out.mesh = CleanPointMesh(out.mesh, {}, &out.repaired);
   if (out.repaired.Total() > 0) spdlog::info("{}: repaired: {}", Where(out), out.repaired.ToString());
-  SATMESH_CHECK(!out.mesh.faces.empty(), ErrorCode::kInvalidInput,
+  SATMESH_CHECK(!out.mesh.faces.empty(), ErrorCode::kInvalidArgument,
                 Where(out) + ": no face left after removing degenerate ones (" + out.repaired.ToString() + ")");
   BoundingBox(&out);
   return out;

@@ -26,9 +26,9 @@ struct InitialMesh {
 
 // Reads the mesh in its own CRS (spec.initial_mesh.crs, else the file's, else
 // spec.output_crs). Throws Error naming "initial.mesh" and the file: kNotFound
-// (missing), kInvalidInput (unreadable, NaN coordinates, zero faces), kInvalidArgument
-// (more than spec.initial_mesh.max_faces faces; no CRS or an unknown one, naming
-// "initial.crs"). PLY/OBJ keep coordinates as floats about the bounding box's centre
+// (missing), else kInvalidArgument (a bad argument of the job: unreadable, NaN
+// coordinates, zero faces, more than spec.initial_mesh.max_faces faces; no CRS or an
+// unknown one, naming "initial.crs"). PLY/OBJ keep coordinates as floats about the bounding box's centre
 // rounded to units: in degrees (EPSG:4326) that is ~3 mm.
 InitialMesh ReadInitialMesh(const JobSpec& spec);
 
@@ -39,7 +39,7 @@ std::string MeshPlanCrs(const JobSpec& spec, const InitialMesh& mesh);
 // The mesh in `crs` (x, y on the map, z ellipsoidal height; projected), repaired there
 // (CleanMesh in metres: close vertices merged, degenerate and duplicate faces and
 // unreferenced vertices dropped; non-manifold faces are dropped later by the coarse
-// remeshing). Throws Error{kInvalidInput} naming the file when a point does not
+// remeshing). Throws Error{kInvalidArgument} naming the file when a point does not
 // transform, when nothing is left after the repair, or when the surface faces down
 // (more than twice as much area faces down as up, seen from above: inverted orientation).
 InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs);

@@ -107,7 +107,7 @@ void CheckMeshSeenByImages(const InitialMesh& mesh, const std::vector<ImageFootp
   }
   char where[160];
   std::snprintf(where, sizeof where, "lon %.6f, lat %.6f, h %.1f m", center.x(), center.y(), center.z());
-  ThrowError(ErrorCode::kInvalidInput, "initial.mesh '" + mesh.file + "': outside the images' footprint (its centre at " +
+  ThrowError(ErrorCode::kInvalidArgument, "initial.mesh '" + mesh.file + "': outside the images' footprint (its centre at " +
                                            where + " is in none of the " + std::to_string(images.size()) +
                                            " images or outside their RPCs' height range); wrong initial.crs?");
 }
@@ -282,7 +282,8 @@ JobPlan PlanJob(const JobSpec& spec) {
   const int c0 = int(std::ceil((xmin - gt[0]) / cell - 0.5)), c1 = int(std::floor((xmax - gt[0]) / cell - 0.5)) + 1;
   const int r0 = int(std::ceil((ymax - gt[3]) / gt[5] - 0.5)), r1 = int(std::floor((ymin - gt[3]) / gt[5] - 0.5)) + 1;
   plan.aoi_cells = Intersect(PixelWindow{c0, r0, c1 - c0, r1 - r0}, plan.dsm.width, plan.dsm.height);
-  SATMESH_CHECK(plan.aoi_cells.width > 0 && plan.aoi_cells.height > 0, ErrorCode::kInvalidInput,
+  SATMESH_CHECK(plan.aoi_cells.width > 0 && plan.aoi_cells.height > 0,
+                spec.initial_dsm.empty() ? ErrorCode::kInvalidArgument : ErrorCode::kInvalidInput,
                 spec.initial_dsm.empty()
                     ? "initial.mesh '" + mesh->file + "': outside the aoi"
                     : "aoi: does not overlap the initial DSM '" + spec.initial_dsm + "'");
