@@ -213,7 +213,7 @@ void ApplyOptionOverride(json* job, const std::string& key_equals_value) {
     parsed = value;
   }
   const auto dot = key.find('.');
-  if (key == "aoi" || key == "tiling" || key == "outputs") {
+  if (key == "aoi" || key == "tiling" || key == "outputs" || key == "initial") {
     (*job)[key] = parsed;  // a whole top-level object, e.g. aoi={"bbox": [...]}
   } else if (dot == std::string::npos) {
     (*job)["options"][key] = parsed;  // a refinement option
