@@ -83,9 +83,9 @@ InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs) {
   out.crs = crs;
   try {
     CrsTransform(mesh.crs, crs).Apply(&out.mesh.points);
-  } catch (const Error& e) {
-    ThrowError(ErrorCode::kInvalidArgument, Where(mesh) + ": does not transform from its CRS '" +
-                                             mesh.crs + "' (" + e.what() + "); wrong initial.crs?");
+  } catch (const Error&) {  // its message holds the planning CRS's whole WKT
+    ThrowError(ErrorCode::kInvalidArgument, Where(mesh) + ": its points do not transform from its CRS '" +
+                                             mesh.crs + "' into the job's; wrong initial.crs?");
   }
   // Seen from above, a surface's up-facing area exceeds its down-facing area (walls count
   // zero, overhangs' undersides are smaller than what covers them; a closed building
