@@ -14,7 +14,8 @@ struct JobImage {
 };
 
 // Area of interest: a polygon (a bbox is its 4 corners) in any CRS. Empty = the initial
-// surface's extent.
+// DSM's extent, else the part of the initial mesh's extent two images see (footprints at
+// the mesh's mid height).
 struct JobAoi {
   std::vector<Eigen::Vector2d> polygon;  // (x, y) in `crs`; >= 3 points, or empty
   std::string crs;                       // "" = the planning CRS (initial DSM's or mesh's)

@@ -112,6 +112,43 @@ void CheckMeshSeenByImages(const InitialMesh& mesh, const std::vector<ImageFootp
                                            " images or outside their RPCs' height range); wrong initial.crs?");
 }
 
+// The part of `box` that at least two images see at the mesh's mid height (their
+// footprints as boxes; `box` itself when none or one image localises).
+Box2d SeenByTwoImages(const Box2d& box, const InitialMesh& mesh, const std::vector<ImageFootprintModel>& images) {
+  const double h = 0.5 * (mesh.min.z() + mesh.max.z());
+  const CrsTransform to_plan(kWgs84Geographic3D, mesh.crs);
+  std::vector<Box2d> footprints;
+  for (const ImageFootprintModel& image : images) {
+    Box2d f{1e300, 1e300, -1e300, -1e300};
+    bool ok = true;
+    for (const auto& corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(image.info.width, 0),
+                               Eigen::Vector2d(image.info.width, image.info.height),
+                               Eigen::Vector2d(0, image.info.height)}) {
+      const auto lon_lat = image.rpc.LocalizeLonLat(corner, h);
+      if (!lon_lat) { ok = false; break; }
+      const Eigen::Vector3d p = to_plan.Apply(Eigen::Vector3d(lon_lat->x(), lon_lat->y(), h));
+      f = {std::min(f.xmin, p.x()), std::min(f.ymin, p.y()), std::max(f.xmax, p.x()), std::max(f.ymax, p.y())};
+    }
+    if (ok) footprints.push_back(f);
+  }
+  Box2d seen{1e300, 1e300, -1e300, -1e300};
+  for (size_t i = 0; i < footprints.size(); ++i)
+    for (size_t j = i + 1; j < footprints.size(); ++j) {
+      const Box2d& a = footprints[i];
+      const Box2d& b = footprints[j];
+      const Box2d both{std::max(a.xmin, b.xmin), std::max(a.ymin, b.ymin), std::min(a.xmax, b.xmax), std::min(a.ymax, b.ymax)};
+      if (both.xmin >= both.xmax || both.ymin >= both.ymax) continue;
+      seen = {std::min(seen.xmin, both.xmin), std::min(seen.ymin, both.ymin), std::max(seen.xmax, both.xmax),
+              std::max(seen.ymax, both.ymax)};
+    }
+  const Box2d out{std::max(box.xmin, seen.xmin), std::max(box.ymin, seen.ymin), std::min(box.xmax, seen.xmax),
+                  std::min(box.ymax, seen.ymax)};
+  if (seen.xmin >= seen.xmax || out.xmin >= out.xmax || out.ymin >= out.ymax) return box;
+  if (out.width() < box.width() || out.height() < box.height())
+    spdlog::info("plan: the initial mesh's extent cut to the {:.0f} x {:.0f} m two images see", out.width(), out.height());
+  return out;
+}
+
 // A mesh job's grid: north-up cells of spec.dsm_resolution_m (0: the images' median GSD
 // at the mesh's centre) over the mesh's extent in its (planning) CRS, on multiples of
 // the cell.
@@ -274,6 +311,8 @@ JobPlan PlanJob(const JobSpec& spec) {
   // AOI -> bounding cells (cells whose centre is inside the polygon's bbox).
   plan.aoi_polygon = spec.aoi.polygon.empty() ? BoxRing(plan.dsm.BoxOf(all))
                                               : AoiInDsmCrs(spec.aoi, plan.dsm);
+  if (spec.aoi.polygon.empty() && spec.initial_dsm.empty())  // a mesh beyond the images
+    plan.aoi_polygon = BoxRing(SeenByTwoImages(plan.dsm.BoxOf(all), *mesh, images));
   double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
   for (const auto& p : plan.aoi_polygon) {
     xmin = std::min(xmin, p.x()), xmax = std::max(xmax, p.x());

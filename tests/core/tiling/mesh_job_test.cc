@@ -115,6 +115,21 @@ double MedianAbsDsmError(const std::string& result_dsm, const std::string& truth
   return diffs[diffs.size() / 2];
 }
 
+TEST_F(MeshJob, WithoutAnAoiTheTilesCoverWhatTheImagesSee) {
+  // The truth mesh has 45 m of ground around the 36 m the images see: planned on the
+  // mesh's whole extent, the outer tiles would have no image.
+  JobSpec spec = Spec();
+  spec.initial_dsm.clear();
+  spec.initial_mesh.path = scene_ + "/truth/mesh.ply";
+  spec.tiling.tile_size_m = 18;
+  spec.refine.iterations_per_level = 1;
+  const JobOutputs o = RunJob(spec, OutDir("no_aoi"));
+  // The images (182 px of 0.3 m) see ~66 m of the mesh's 126 m.
+  EXPECT_LT(o.plan.aoi_cells.width * o.plan.dsm.geo_transform[1], 70);
+  EXPECT_LT(o.plan.aoi_cells.height * o.plan.dsm.geo_transform[1], 70);
+  for (const auto& t : o.tiles) EXPECT_TRUE(t.ok) << t.name << ": " << t.error;
+}
+
 TEST_F(MeshJob, StartsFromTheTruthMeshAndKeepsIt) {
   JobSpec spec = Spec();
   spec.initial_dsm.clear();
