@@ -94,22 +94,35 @@ std::pair<double, double> HeightsOver(const InitialMesh& mesh, const Box2d& box)
   return {lo, hi};
 }
 
-// The mesh must be where the images look: its centre inside an image (with its height
-// within the RPC's height range), else the mesh is elsewhere or its CRS is wrong.
+// The mesh must be where the images look: some image sees part of its bounding box (at
+// heights within the image's RPC height range), else the mesh is elsewhere or its CRS is
+// wrong.
 void CheckMeshSeenByImages(const InitialMesh& mesh, const std::vector<ImageFootprintModel>& images) {
-  const Eigen::Vector3d center =
-      CrsTransform(mesh.crs, kWgs84Geographic3D).Apply(0.5 * (mesh.min + mesh.max));
+  const CrsTransform to_geo(mesh.crs, kWgs84Geographic3D);
+  std::vector<Eigen::Vector3d> corners;
+  for (int k = 0; k < 8; ++k)
+    corners.push_back(to_geo.Apply(Eigen::Vector3d(k & 1 ? mesh.max.x() : mesh.min.x(),
+                                                   k & 2 ? mesh.max.y() : mesh.min.y(),
+                                                   k & 4 ? mesh.max.z() : mesh.min.z())));
   for (const ImageFootprintModel& image : images) {
     const RpcCoefficients& c = image.rpc.coefficients();
-    if (std::abs(center.z() - c.height_off) > 1.5 * std::abs(c.height_scale)) continue;
-    const Eigen::Vector2d px = image.rpc.PixelFromGeo(center);
-    if (px.x() >= 0 && px.y() >= 0 && px.x() <= image.info.width && px.y() <= image.info.height) return;
+    const double h_lo = c.height_off - 1.5 * std::abs(c.height_scale), h_hi = c.height_off + 1.5 * std::abs(c.height_scale);
+    if (mesh.max.z() < h_lo || mesh.min.z() > h_hi) continue;
+    double cmin = 1e300, cmax = -1e300, rmin = 1e300, rmax = -1e300;
+    for (Eigen::Vector3d g : corners) {
+      g.z() = std::clamp(g.z(), h_lo, h_hi);
+      const Eigen::Vector2d px = image.rpc.PixelFromGeo(g);
+      cmin = std::min(cmin, px.x()), cmax = std::max(cmax, px.x());
+      rmin = std::min(rmin, px.y()), rmax = std::max(rmax, px.y());
+    }
+    if (cmax >= 0 && rmax >= 0 && cmin <= image.info.width && rmin <= image.info.height) return;
   }
+  const Eigen::Vector3d center = to_geo.Apply(0.5 * (mesh.min + mesh.max));
   char where[160];
   std::snprintf(where, sizeof where, "lon %.6f, lat %.6f, h %.1f m", center.x(), center.y(), center.z());
-  ThrowError(ErrorCode::kInvalidArgument, "initial.mesh '" + mesh.file + "': outside the images' footprint (its centre at " +
-                                           where + " is in none of the " + std::to_string(images.size()) +
-                                           " images or outside their RPCs' height range); wrong initial.crs?");
+  ThrowError(ErrorCode::kInvalidArgument, "initial.mesh '" + mesh.file + "': outside the images' footprint (none of the " +
+                                              std::to_string(images.size()) + " images sees its box, centre at " + where +
+                                              ", within their RPCs' height range); wrong initial.crs?");
 }
 
 // The part of `box` that at least two images see at the mesh's mid height (their

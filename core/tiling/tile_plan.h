@@ -70,8 +70,8 @@ struct JobPlan {
 // Mesh jobs (spec.initial_mesh; initial_mesh.h): the grid is the mesh's extent in the
 // planning CRS (MeshPlanCrs) at spec.dsm_resolution_m (0: the images' median GSD at the
 // mesh's centre), unless a DSM gives it; a bad mesh, one outside the AOI or outside the
-// images' footprint (centre in no image, or heights outside the RPCs' range: a wrong
-// CRS) throws Error{kInvalidArgument} naming the file and the problem.
+// images' footprint (no image sees its bounding box within the RPC's height range: a
+// wrong CRS) throws Error{kInvalidArgument} naming the file and the problem.
 JobPlan PlanJob(const JobSpec& spec);
 
 // Reads a window of cells of a DSM (nodata -> NaN); cells outside the raster are NaN.

@@ -17,6 +17,7 @@
 #include "core/mesh/mesh_io.h"
 #include "core/synth/scene_writer.h"
 #include "core/tiling/job.h"
+#include "core/tiling/tile_input.h"
 #include "proto/job_spec_json.h"
 #include "tests/scratch_dir.h"
 
@@ -292,6 +293,58 @@ TEST_F(MeshJob, AMeshInEcefOrGeographicCoordinatesGivesTheSameResult) {
     const std::string truth_dsm = scene_ + "/truth/dsm.tif";
     EXPECT_NEAR(MedianAbsDsmError(o.dsm_path, truth_dsm), MedianAbsDsmError(utm.dsm_path, truth_dsm), 0.01) << crs;
   }
+}
+
+}  // namespace
+}  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+TEST_F(MeshJob, WithADsmTooTheDsmFillsWhereTheMeshHasNoSurface) {
+  // The truth mesh's west half, and the initial DSM.
+  const TriangleMesh truth = ReadMesh(scene_ + "/truth/mesh.ply");
+  PointMesh west;
+  for (size_t i = 0; i < truth.num_vertices(); ++i) west.points.push_back(truth.AbsoluteVertex(i));
+  west.faces = truth.faces;
+  const auto aoi = SceneAoi();
+  const double x_mid = 0.5 * (aoi[0].x() + aoi[1].x());
+  west = ClipToBox(west, Box2d{aoi[0].x() - 100, aoi[0].y() - 100, x_mid, aoi[2].y() + 100});
+  TriangleMesh half;
+  half.crs = truth.crs;
+  half.origin = truth.origin;
+  half.faces = west.faces;
+  for (const auto& p : west.points) half.vertices.push_back((p - half.origin).cast<float>());
+  const std::string dir = OutDir("mesh_and_dsm");
+  fs::create_directories(dir);
+  WriteMesh(dir + "/west.ply", half);
+
+  JobSpec spec = Spec();  // keeps initial.dsm: the plan is on its grid
+  spec.initial_mesh.path = dir + "/west.ply";
+  const JobPlan plan = PlanJob(spec);
+  ASSERT_EQ(plan.tiles.size(), 1u);
+  const TileInput input = PrepareTileInput(spec, plan, 0);
+  const size_t cells = input.initial_heights.z.size();
+  size_t empty = 0, west_cells = 0, west_match = 0;
+  const Dsm truth_dsm = ReadDsm(scene_ + "/truth/dsm.tif");
+  for (int j = 0; j < input.initial_heights.height; ++j)
+    for (int i = 0; i < input.initial_heights.width; ++i) {
+      const float z = input.initial_heights.at(i, j);
+      empty += !std::isfinite(z);
+      const double x = input.initial_heights.geo_transform[0] + (i + 0.5) * input.initial_heights.geo_transform[1];
+      if (x < x_mid - 1) {  // the mesh's half: the truth's heights, not the DSM's
+        const double y = input.initial_heights.geo_transform[3] + (j + 0.5) * input.initial_heights.geo_transform[5];
+        const int ti = int((x - truth_dsm.geo_transform[0]) / truth_dsm.geo_transform[1]);
+        const int tj = int((y - truth_dsm.geo_transform[3]) / truth_dsm.geo_transform[5]);
+        if (ti < 0 || tj < 0 || ti >= truth_dsm.width || tj >= truth_dsm.height || !std::isfinite(z)) continue;
+        ++west_cells;
+        west_match += std::abs(z - truth_dsm.at(ti, tj)) < 0.05;
+      }
+    }
+  EXPECT_LT(empty, cells / 50) << "the DSM did not fill the east half";
+  EXPECT_GT(input.filled_dsm_cells, cells / 3);  // about the east half (+ overlap)
+  EXPECT_LT(input.filled_dsm_cells, cells * 2 / 3);
+  EXPECT_GT(west_match, west_cells * 9 / 10);
 }
 
 }  // namespace
