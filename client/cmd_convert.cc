@@ -12,6 +12,7 @@
 #include "core/common/error.h"
 #include "core/dsm/dsm.h"
 #include "core/mesh/mesh_io.h"
+#include "core/synth/perturb.h"
 
 namespace satmesh::cli {
 namespace {
@@ -20,7 +21,8 @@ constexpr const char* kUsage =
     "usage:\n"
     "  satmesh convert dsm2mesh IN.tif OUT.{ply,obj,drc,glb} [write options]\n"
     "  satmesh convert mesh2dsm IN_MESH --grid REF.tif OUT.tif [--origin X,Y,Z]\n"
-    "  satmesh convert mesh IN OUT [write options]\n"
+    "  satmesh convert mesh IN OUT [write options] [--perturb-m A [--perturb-wavelength-m L]\n"
+    "                                               [--seed S]]\n"
     "\n"
     "dsm2mesh: a vertex per valid DSM cell centre, two triangles per 2x2 block of valid\n"
     "  cells (one if exactly 3 are valid); nodata stays open.\n"
@@ -28,7 +30,9 @@ constexpr const char* kUsage =
     "  (size, transform, CRS; its heights are ignored); NaN where the mesh is absent.\n"
     "  IN_MESH must be in REF.tif's CRS. --origin is added to the mesh's vertices (for\n"
     "  .drc/.glb files, which store tile-local positions).\n"
-    "mesh: format by extension (.ply, .obj, .drc, .glb).\n"
+    "mesh: format by extension (.ply, .obj, .drc, .glb). --perturb-m moves every vertex\n"
+    "  along its normal by smooth random noise of amplitude A m (plane waves of L m, default\n"
+    "  15; synth::PerturbAlongNormals): an imperfect start whose truth is known.\n"
     "\n"
     "write options:\n"
     "  --ply-ascii          ASCII PLY (default binary little endian)\n"
@@ -97,7 +101,14 @@ int RunConvert(const std::vector<std::string>& raw) {
     spdlog::info("wrote {}: {}x{} cells, {} with a height", pos[2], out.width, out.height,
                  valid);
   } else if (mode == "mesh") {
-    const TriangleMesh mesh = ReadMesh(pos[1]);
+    TriangleMesh mesh = ReadMesh(pos[1]);
+    if (args.Has("perturb-m")) {
+      synth::PerturbOptions perturb;
+      perturb.amplitude_m = args.GetDouble("perturb-m", perturb.amplitude_m);
+      perturb.wavelength_m = args.GetDouble("perturb-wavelength-m", perturb.wavelength_m);
+      perturb.seed = uint32_t(args.GetInt("seed", int(perturb.seed)));
+      mesh = synth::PerturbAlongNormals(mesh, perturb);
+    }
     WriteAndLog(pos[2], mesh, args);
   } else {
     return Usage("unknown mode '" + mode + "'");

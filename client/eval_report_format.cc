@@ -94,7 +94,8 @@ json DsmEvaluationToJson(const DsmEvaluation& e) {
 }
 
 json Mesh3dMetricsToJson(const Mesh3dMetrics& m) {
-  return {{"all", ScoresToJson(m.all)}, {"facade", ScoresToJson(m.facade)}};
+  return {{"all", ScoresToJson(m.all)}, {"facade", ScoresToJson(m.facade)},
+          {"under_overhang", ScoresToJson(m.under_overhang)}};
 }
 
 json SurfaceEvaluationToJson(const SurfaceEvaluation& e) {
@@ -132,6 +133,7 @@ std::string FormatSceneEvaluation(const SceneEvaluation& e) {
   if (!e.result.mesh3d.all.thresholds_m.empty()) {
     Add3dRows(rows, "3D all   ", e.result.mesh3d.all, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.all; });
     Add3dRows(rows, "3D facade", e.result.mesh3d.facade, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.facade; });
+    Add3dRows(rows, "3D under overhangs", e.result.mesh3d.under_overhang, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.under_overhang; });
   }
   std::string out = fmt::format("grid {}x{} cells, GSD {:g} m, {} roof-mask cells\n", e.grid_width,
                                 e.grid_height, e.gsd_m, e.num_mask_cells);

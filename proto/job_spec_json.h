@@ -16,7 +16,8 @@ JobSpec JobSpecFromJson(const nlohmann::json& job, const std::string& base_dir);
 JobSpec ReadJobFile(const std::string& path);
 // Applies a "key=value" override (value parsed as JSON, else a string): "levels=2" sets
 // options.levels, "tiling.size_m=100" sets job["tiling"]["size_m"], and
-// 'aoi={"bbox": [...]}' (or tiling=, outputs=) replaces that top-level object.
+// 'aoi={"bbox": [...]}' (or tiling=, outputs=, initial=) replaces that top-level object
+// ('initial={"mesh": "runs/a/"}' refines a previous result).
 void ApplyOptionOverride(nlohmann::json* job, const std::string& key_equals_value);
 
 // Outputs (core structs -> JSON). metrics.json: per tile and totals (+ the single-tile

@@ -187,7 +187,8 @@ struct ApiServer::Impl {
       job["tiling"]["memory_budget_mb"] = options.memory_budget_mb > 0
                                               ? options.memory_budget_mb
                                               : DefaultMemoryBudgetMb(options.scheduler.workers);
-    const JobSpec spec = proto::JobSpecFromJson(job, "/");
+    JobSpec spec = proto::JobSpecFromJson(job, "/");
+    spec.initial_mesh.max_faces = options.inputs.max_mesh_faces;
     const std::string problem = spec.Check();
     if (!problem.empty()) ThrowError(ErrorCode::kInvalidArgument, problem);
     CheckLimits(spec, {}, options.inputs);

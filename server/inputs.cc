@@ -51,7 +51,8 @@ std::string CheckDriver(const std::string& path, const std::string& href, const 
                        "JP2OpenJPEG, PNG, JPEG, HFA), not one that references other files or URLs");
 }
 
-std::string Resolve(const std::string& href, const std::string& field, const InputPolicy& policy) {
+std::string Resolve(const std::string& href, const std::string& field, const InputPolicy& policy,
+                    bool directory_ok = false) {
   if (href.find('\0') != std::string::npos) Forbidden(field, "contains a NUL byte");
   if (HasDotDot(href)) Forbidden(field, "'..' is not allowed in hrefs");
   if (href.rfind("/vsi", 0) == 0) {
@@ -74,6 +75,7 @@ std::string Resolve(const std::string& href, const std::string& field, const Inp
   for (const auto& root : policy.data_roots) {
     const fs::path real_root = fs::canonical(root, ec);
     if (!ec && IsUnder(real, real_root)) {
+      if (directory_ok && fs::is_directory(real)) return real.string();
       if (!fs::is_regular_file(real)) ThrowError(ErrorCode::kInvalidArgument, field + ": '" + href + "' is not a file");
       return CheckDriver(real.string(), href, field);
     }
@@ -93,6 +95,8 @@ std::string InputPolicy::Check() const {
   if (max_images < 2) return "max_images: must be >= 2";
   if (max_tiles < 1) return "max_tiles: must be >= 1";
   if (max_pixels < 1) return "max_pixels: must be >= 1";
+  if (max_mesh_faces < 1 || max_mesh_faces > JobInitialMesh{}.max_faces)
+    return "max_mesh_faces: must be in [1, " + std::to_string(JobInitialMesh{}.max_faces) + "]";
   return "";
 }
 
@@ -111,6 +115,16 @@ void ResolveHrefs(nlohmann::json* job, const InputPolicy& policy) {
     auto& initial = (*job)["initial"];
     if (initial.contains("dsm") && initial["dsm"].is_string() && !initial["dsm"].get<std::string>().empty())
       initial["dsm"] = Resolve(initial["dsm"], "initial.dsm", policy);
+    // A previous result (its directory or tileset.json) means its mesh.ply: resolved as
+    // that file, so a link inside the directory cannot lead out of the roots.
+    if (initial.contains("mesh") && initial["mesh"].is_string() && !initial["mesh"].get<std::string>().empty()) {
+      const std::string href = initial["mesh"];
+      const std::string real = Resolve(href, "initial.mesh", policy, /*directory_ok=*/true);
+      fs::path file(real);
+      if (fs::is_directory(file)) file /= "mesh.ply";
+      else if (file.filename() == "tileset.json") file = file.parent_path() / "mesh.ply";
+      initial["mesh"] = file == fs::path(real) ? real : Resolve(file.string(), "initial.mesh", policy);
+    }
   }
 }
 

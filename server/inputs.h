@@ -17,6 +17,8 @@ struct InputPolicy {
   int max_images = 64;                  // images per job, >= 2
   int max_tiles = 1024;                 // tiles per job, >= 1
   int64_t max_pixels = 4'000'000'000;   // total image pixels per job, >= 1
+  size_t max_mesh_faces = 20'000'000;   // faces of a job's initial mesh, in [1, the core's
+                                        // JobInitialMesh::max_faces]
   std::string Check() const;
 };
 
@@ -24,8 +26,9 @@ struct InputPolicy {
 // or other format that makes GDAL read further files or URLs named inside the file).
 inline constexpr const char* kInputRasterDrivers[] = {"GTiff", "COG", "NITF", "JP2OpenJPEG", "PNG", "JPEG", "HFA"};
 
-// Rewrites every href of the job (images[i].href, initial.dsm) to an absolute, resolved
-// path. Throws HttpError 403 for a path outside the roots (or a virtual path not allowed)
+// Rewrites every href of the job (images[i].href, initial.dsm, initial.mesh) to an
+// absolute, resolved path; an initial.mesh naming a previous result (its directory or
+// tileset.json) becomes that result's mesh.ply (core/tiling/initial_mesh.h). Throws HttpError 403 for a path outside the roots (or a virtual path not allowed)
 // and Error{kInvalidArgument} naming the field for a file that does not exist. Fields of
 // the wrong shape are left for the job parser to name.
 // Refused with 403 (RELIABILITY.md, "Paths from requests"): NUL bytes; ".." components;

@@ -89,7 +89,7 @@ ExecutionPlan RealExecutor::Plan(const JobSpec& spec) {
     const RasterInfo info = InfoFor(spec.images[i].path, "images[" + std::to_string(i) + "].href");
     plan.pixels += int64_t(info.width) * info.height;
   }
-  InfoFor(spec.initial_dsm, "initial.dsm");
+  if (!spec.initial_dsm.empty()) InfoFor(spec.initial_dsm, "initial.dsm");
   const JobPlan job_plan = PlanJob(spec);
   CheckJobInputs(spec, job_plan);  // bad data refused at submission, named (422)
   for (const PlannedTile& tile : job_plan.tiles) plan.tiles.push_back({tile.x, tile.y});

@@ -29,6 +29,7 @@ std::string ServerUsage() {
          "         [--data-root DIR ...] [--allow-vsi /vsicurl/ ...] [--workers 2]\n"
          "         [--token T | env SATMESH_TOKEN] [--max-body-bytes 1048576]\n"
          "         [--max-images 64] [--max-tiles 1024] [--max-pixels 4000000000]\n"
+         "         [--max-mesh-faces 20000000]\n"
          "         [--http-threads 32] [--proto-dir DIR] [--viewer-dir DIR | env SATMESH_VIEWER_DIR]\n"
          "         [--cors-origin https://example.org ... | --cors-origin '*'] [--memory-budget MB]\n";
 }
@@ -57,6 +58,7 @@ ServerOptions ParseServerArgs(const std::vector<std::string>& args,
     else if (key == "max-images") o.inputs.max_images = int(ToInteger(key, value));
     else if (key == "max-tiles") o.inputs.max_tiles = int(ToInteger(key, value));
     else if (key == "max-pixels") o.inputs.max_pixels = ToInteger(key, value);
+    else if (key == "max-mesh-faces") o.inputs.max_mesh_faces = size_t(ToInteger(key, value));
     else if (key == "http-threads") o.http_threads = int(ToInteger(key, value));
     else if (key == "proto-dir") o.proto_dir = value;
     else if (key == "viewer-dir") o.viewer_dir = value;

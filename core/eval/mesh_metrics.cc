@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/common/error.h"
+#include "core/raycast/ray_scene.h"
 
 namespace satmesh {
 namespace {
@@ -105,6 +106,18 @@ SurfaceSamples SampleSurface(const TriangleMesh& mesh, const SampleOptions& opti
   return s;
 }
 
+std::vector<uint8_t> UnderOverhang(const TriangleMesh& mesh, const SurfaceSamples& samples) {
+  std::vector<uint8_t> covered(samples.points.size(), 0);
+  if (samples.points.empty() || mesh.faces.empty()) return covered;
+  std::vector<Ray> rays(samples.points.size());
+  for (size_t k = 0; k < rays.size(); ++k) {
+    rays[k].origin = (samples.points[k] - mesh.origin).cast<float>() + 0.1f * samples.normals[k];
+    rays[k].direction = Eigen::Vector3f::UnitZ();
+  }
+  RayScene(mesh).Occluded(rays.data(), covered.data(), rays.size());
+  return covered;
+}
+
 Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& truth,
                              const Mesh3dOptions& options) {
   const std::string msg = options.Check();
@@ -120,6 +133,8 @@ Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& tru
   Mesh3dMetrics m;
   m.all = Scores(d_result, {}, d_truth, {}, options.thresholds_m);
   m.facade = Scores(d_result, facade_result, d_truth, facade_truth, options.thresholds_m);
+  m.under_overhang = Scores(d_result, UnderOverhang(result, s_result), d_truth,
+                            UnderOverhang(truth, s_truth), options.thresholds_m);
   return m;
 }
 

@@ -55,7 +55,15 @@ struct Mesh3dScores {
 struct Mesh3dMetrics {
   Mesh3dScores all;     // every sample
   Mesh3dScores facade;  // facade samples only (on either side; distances to the whole surface)
+  // Samples with their own surface above them (UnderOverhang): arcades, the ground and
+  // walls under balconies and eaves, what a 2.5D surface cannot hold. Completeness: of
+  // the truth's such samples; accuracy: of the result's.
+  Mesh3dScores under_overhang;
 };
+
+// Per sample of `mesh`: 1 if a vertical ray up from 0.1 m off the sample (along its
+// normal, out of the surface) hits `mesh`, i.e. the mesh covers the sample from above.
+std::vector<uint8_t> UnderOverhang(const TriangleMesh& mesh, const SurfaceSamples& samples);
 
 // Both meshes in the same CRS (origins may differ). Throws Error on invalid options.
 Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& truth,

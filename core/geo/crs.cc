@@ -1,5 +1,8 @@
 #include "core/geo/crs.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <cpl_conv.h>
 #include <ogr_spatialref.h>
 
@@ -41,6 +44,12 @@ std::string CrsToWkt(const std::string& crs) {
 }
 
 bool CrsIsGeographic(const std::string& crs) { return ParseCrs(crs).IsGeographic() != 0; }
+bool CrsIsProjected(const std::string& crs) { return ParseCrs(crs).IsProjected() != 0; }
+
+std::string UtmCrsAt(double lon_deg, double lat_deg) {
+  const int zone = std::clamp(int(std::floor((lon_deg + 180.0) / 6.0)) + 1, 1, 60);
+  return "EPSG:" + std::to_string((lat_deg >= 0 ? 32600 : 32700) + zone);
+}
 
 struct CrsTransform::Impl {
   OGRSpatialReference source, target;

@@ -14,6 +14,9 @@ inline constexpr const char* kWgs84Geographic3D = "EPSG:4979";  // lon, lat, ell
 // Throws Error{kInvalidInput} naming the CRS if it cannot be parsed.
 std::string CrsToWkt(const std::string& crs);
 bool CrsIsGeographic(const std::string& crs);
+bool CrsIsProjected(const std::string& crs);  // metres on a map (not geographic, not ECEF)
+// The WGS84 UTM zone's CRS at a point ("EPSG:326zz" north, "EPSG:327zz" south).
+std::string UtmCrsAt(double lon_deg, double lat_deg);
 
 class CrsTransform {
  public:

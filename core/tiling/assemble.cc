@@ -11,6 +11,7 @@
 
 #include "core/common/error.h"
 #include "core/dsm/dsm.h"
+#include "core/mesh/mesh_clean.h"
 #include "core/mesh/mesh_io.h"
 
 namespace satmesh {
@@ -140,6 +141,9 @@ Assembly AssembleOutputs(const JobPlan& plan, const std::vector<TileResult>& res
         if (tc) confidence.at(col - a.col0, row - a.row0) = tc->At(col, row);
       }
   }
+  // Pieces meet along the cores' edges: a cut vertex two tiles share is one vertex.
+  const MeshDebris merged = CleanMesh(&mesh);
+  if (merged.Total() > 0) spdlog::info("assemble: {}", merged.ToString());
   out.vertices = mesh.num_vertices();
   out.faces = mesh.num_faces();
   out.mesh_path = (fs::path(out_dir) / "mesh.ply").string();

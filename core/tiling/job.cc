@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <mutex>
 #include <thread>
@@ -83,7 +84,11 @@ std::string JobSpec::Check() const {
   if (images.size() < 2) return "images: need at least 2, got " + std::to_string(images.size());
   for (size_t i = 0; i < images.size(); ++i)
     if (images[i].path.empty()) return "images[" + std::to_string(i) + "].href is empty";
-  if (initial_dsm.empty()) return "initial.dsm is required";
+  if (initial_dsm.empty() && initial_mesh.path.empty()) return "initial: needs dsm or mesh (or both)";
+  if (initial_mesh.max_faces < 1) return "initial mesh: max_faces must be >= 1";
+  if (!(dsm_resolution_m >= 0 && std::isfinite(dsm_resolution_m)))
+    return "outputs.dsm_resolution_m must be >= 0 (0 = the images' GSD), got " +
+           std::to_string(dsm_resolution_m);
   if (!(fill_holes_m >= 0 && fill_holes_m <= 10000))
     return "initial.fill_holes_m must be in [0, 10000] m, got " + std::to_string(fill_holes_m);
   if (!aoi.polygon.empty() && aoi.polygon.size() < 3)

@@ -14,10 +14,11 @@ struct JobImage {
 };
 
 // Area of interest: a polygon (a bbox is its 4 corners) in any CRS. Empty = the initial
-// surface's extent.
+// DSM's extent, else the part of the initial mesh's extent two images see (footprints at
+// the mesh's mid height).
 struct JobAoi {
   std::vector<Eigen::Vector2d> polygon;  // (x, y) in `crs`; >= 3 points, or empty
-  std::string crs;                       // "" = the initial DSM's CRS
+  std::string crs;                       // "" = the planning CRS (initial DSM's or mesh's)
 };
 
 struct TilingOptions {
@@ -31,11 +32,26 @@ struct TilingOptions {
   std::string Check() const;
 };
 
+// The initial surface's mesh (core/tiling/initial_mesh.h reads and checks it).
+struct JobInitialMesh {
+  std::string path;        // PLY, OBJ, .glb/.drc; or a previous job's result directory or
+                           // its tileset.json (that job's mesh.ply); "" = none
+  std::string crs;         // "" = the file's (PLY/OBJ "crs" comment), else outputs.crs
+  size_t max_faces = 20'000'000;  // a larger mesh is refused (not on the wire: a server
+                                  // sets its own limit), >= 1
+};
+
 struct JobSpec {
   std::vector<JobImage> images;
-  std::string initial_dsm;     // GeoTIFF DSM (ellipsoidal heights), projected CRS
+  // The initial surface: a DSM, a mesh, or both (the mesh is refined; the DSM fills
+  // only where the mesh has no surface). At least one.
+  std::string initial_dsm;     // GeoTIFF DSM (ellipsoidal heights), projected CRS; "" = none
+  JobInitialMesh initial_mesh;
   double fill_holes_m = 50;    // the DSM's holes filled up to this far from data (FillDsmHoles), m; 0: none
-  std::string output_crs;      // "" = the initial DSM's CRS
+  std::string output_crs;      // "" = the initial DSM's CRS, else the initial mesh's
+  // Mesh jobs without a DSM: cell of the job's grid (dsm.tif, the tiles' DSMs), m in the
+  // planning CRS, >= 0; 0 = the images' GSD. Ignored when initial_dsm gives the grid.
+  double dsm_resolution_m = 0;
   JobAoi aoi;
   TilingOptions tiling;
   RefineOptions refine;

@@ -1,5 +1,7 @@
 #include "core/tiling/memory_budget.h"
 
+#include <tuple>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -39,13 +41,18 @@ std::vector<ImageFootprintModel> ReadImageFootprintModels(const JobSpec& spec) {
 
 TileMemoryEstimate EstimateTileMemory(const JobSpec& spec, const DsmGrid& grid,
                                       const std::vector<ImageFootprintModel>& images,
-                                      const PixelWindow& padded_cells) {
+                                      const PixelWindow& padded_cells,
+                                      const std::pair<double, double>* heights) {
   TileMemoryEstimate out;
-  const Dsm dsm = ReadDsmWindow(spec.initial_dsm, padded_cells);
-  float h_min = INFINITY, h_max = -INFINITY;
-  for (float z : dsm.z)
-    if (std::isfinite(z)) h_min = std::min(h_min, z), h_max = std::max(h_max, z);
-  out.dsm_cells = double(dsm.z.size());
+  double h_min = INFINITY, h_max = -INFINITY;
+  if (heights) {
+    std::tie(h_min, h_max) = *heights;
+  } else {
+    const Dsm dsm = ReadDsmWindow(spec.initial_dsm, padded_cells);
+    for (float z : dsm.z)
+      if (std::isfinite(z)) h_min = std::min<double>(h_min, z), h_max = std::max<double>(h_max, z);
+  }
+  out.dsm_cells = double(padded_cells.width) * padded_cells.height;
   if (std::isfinite(h_min)) {
     const Box2d box = grid.BoxOf(padded_cells);
     const CrsTransform geo_from_dsm(grid.crs_wkt, kWgs84Geographic3D);

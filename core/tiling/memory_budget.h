@@ -5,6 +5,7 @@
 // windows it reads: a fixed part plus a number of bytes per full-resolution window pixel
 // (measured: BENCHMARKS.md, "Memory budget"), plus the initial surface's cells.
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/image/image_io.h"
@@ -34,11 +35,13 @@ struct ImageFootprintModel {
 };
 std::vector<ImageFootprintModel> ReadImageFootprintModels(const JobSpec& spec);
 
-// Estimates the peak of refining the DSM cells `padded_cells` of the job: reads those
-// cells (height range) and projects the box into every image (no pixels read).
+// Estimates the peak of refining the grid cells `padded_cells` of the job: reads those
+// cells of the initial DSM for their height range (or takes `heights`, min and max, e.g.
+// of an initial mesh) and projects the box into every image (no pixels read).
 TileMemoryEstimate EstimateTileMemory(const JobSpec& spec, const DsmGrid& dsm,
                                       const std::vector<ImageFootprintModel>& images,
-                                      const PixelWindow& padded_cells);
+                                      const PixelWindow& padded_cells,
+                                      const std::pair<double, double>* heights = nullptr);
 
 // "tile 0_0 needs an estimated 9120 MB (26 views, 170 Mpx of image windows) but the
 // memory budget is 6000 MB per worker": the message of a refused tile.

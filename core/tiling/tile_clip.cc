@@ -77,7 +77,7 @@ class Clipper {
 
 }  // namespace
 
-PointMesh ClipToBox(const PointMesh& mesh, const Box2d& box) {
+PointMesh ClipToBox(const PointMesh& mesh, const Box2d& box, const MeshCleanOptions& clean) {
   Clipper clipper(mesh, box);
   std::vector<Eigen::Vector3i> faces;
   for (const auto& f : mesh.faces) {
@@ -90,6 +90,14 @@ PointMesh ClipToBox(const PointMesh& mesh, const Box2d& box) {
       outside_one = outside_one || inside == 0;
     }
     if (outside_one) continue;
+    // A face in the plane of the east or north edge (a wall standing on it) belongs to
+    // the neighbour: both would keep it otherwise.
+    const auto on_plane = [&](int plane) {
+      for (int k = 0; k < 3; ++k)
+        if (Inside(mesh.points[f[k]], box, plane) != 0) return false;
+      return true;
+    };
+    if (on_plane(1) || on_plane(3)) continue;
     if (inside_all == 4) {
       faces.push_back(f);
       continue;
@@ -113,6 +121,27 @@ PointMesh ClipToBox(const PointMesh& mesh, const Box2d& box) {
     }
   }
   out.faces = std::move(faces);
+  return CleanPointMesh(out, clean);
+}
+
+PointMesh CleanPointMesh(const PointMesh& mesh, const MeshCleanOptions& options, MeshDebris* removed) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : mesh.points) centroid += p;
+  centroid = (centroid / double(std::max<size_t>(1, mesh.points.size()))).array().round().matrix();
+  TriangleMesh local;
+  local.origin = centroid;
+  local.faces = mesh.faces;
+  local.height_sigma = mesh.height_sigma;
+  local.vertices.reserve(mesh.points.size());
+  for (const auto& p : mesh.points) local.vertices.push_back((p - centroid).cast<float>());
+  const MeshDebris debris = CleanMesh(&local, options);
+  if (removed) *removed = debris;
+  if (debris.Total() == 0) return mesh;
+  PointMesh out;
+  out.faces = std::move(local.faces);
+  out.height_sigma = std::move(local.height_sigma);
+  out.points.reserve(local.vertices.size());
+  for (size_t i = 0; i < local.vertices.size(); ++i) out.points.push_back(local.AbsoluteVertex(i));
   return out;
 }
 

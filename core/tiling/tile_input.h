@@ -20,8 +20,13 @@ struct TileInput {
   std::vector<std::string> view_names;
   std::vector<std::string> dropped_views;  // images that do not see the tile
   double image_bytes = 0;    // full-resolution image windows held, bytes
-  size_t filled_dsm_cells = 0;  // the DSM's empty cells filled before meshing (FillDsmHoles)
+  size_t filled_dsm_cells = 0;  // the DSM's empty cells filled before meshing (FillDsmHoles);
+                                // mesh jobs with a DSM: its cells added where the mesh has none
+  Dsm initial_heights;       // the initial surface's height per cell of the tile (NaN: none)
 };
+
+// The job grid's cells `cells` as an empty (NaN) DSM.
+Dsm TileGrid(const JobPlan& plan, const PixelWindow& cells);
 
 // The pixel window of `rpc` that sees the points `box_geo` (geodetic corners of a 3D box),
 // widened by margin_px and clipped to the raster.
@@ -45,8 +50,11 @@ double CoarseCellSize(const RefineOptions& options, double dsm_cell_m);
 TileInput PrepareTileInput(const JobSpec& spec, Dsm initial_dsm, double coarse_cell_m);
 
 // The same for one planned tile: reads only the DSM cells of the padded tile and only
-// the image windows that see its 3D box (extent x height range +- margin). Throws
-// Error{kInvalidInput} when the tile has no valid DSM cell.
+// the image windows that see its 3D box (extent x height range +- margin). Mesh jobs
+// (spec.initial_mesh): the initial mesh clipped to the padded box (ClipInitialMesh: 3D
+// kept, nothing rasterised), the DSM, if given too, added where the mesh has no surface;
+// the frame at the box centre, the height range from the piece. Throws
+// Error{kInvalidInput} when the tile has no valid DSM cell / no mesh surface.
 TileInput PrepareTileInput(const JobSpec& spec, const JobPlan& plan, int tile_index);
 
 }  // namespace satmesh

@@ -8,10 +8,14 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
+#include <utility>
 
 #include "core/common/error.h"
 #include "core/common/gdal_init.h"
 #include "core/geo/crs.h"
+#include "core/refine/view_setup.h"
+#include "core/tiling/initial_mesh.h"
 #include "core/tiling/memory_budget.h"
 
 namespace satmesh {
@@ -92,10 +96,109 @@ PixelWindow Intersect(const PixelWindow& w, int width, int height) {
   return out;
 }
 
+// The height range of the mesh's points over `box` (+-inf when none).
+std::pair<double, double> HeightsOver(const InitialMesh& mesh, const Box2d& box) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& p : mesh.mesh.points)
+    if (box.Contains(p.x(), p.y())) lo = std::min(lo, p.z()), hi = std::max(hi, p.z());
+  return {lo, hi};
+}
+
+// The mesh must be where the images look: some image sees part of its bounding box (at
+// heights within the image's RPC height range), else the mesh is elsewhere or its CRS is
+// wrong.
+void CheckMeshSeenByImages(const InitialMesh& mesh, const std::vector<ImageFootprintModel>& images) {
+  const CrsTransform to_geo(mesh.crs, kWgs84Geographic3D);
+  std::vector<Eigen::Vector3d> corners;
+  for (int k = 0; k < 8; ++k)
+    corners.push_back(to_geo.Apply(Eigen::Vector3d(k & 1 ? mesh.max.x() : mesh.min.x(),
+                                                   k & 2 ? mesh.max.y() : mesh.min.y(),
+                                                   k & 4 ? mesh.max.z() : mesh.min.z())));
+  for (const ImageFootprintModel& image : images) {
+    const RpcCoefficients& c = image.rpc.coefficients();
+    const double h_lo = c.height_off - 1.5 * std::abs(c.height_scale), h_hi = c.height_off + 1.5 * std::abs(c.height_scale);
+    if (mesh.max.z() < h_lo || mesh.min.z() > h_hi) continue;
+    double cmin = 1e300, cmax = -1e300, rmin = 1e300, rmax = -1e300;
+    for (Eigen::Vector3d g : corners) {
+      g.z() = std::clamp(g.z(), h_lo, h_hi);
+      const Eigen::Vector2d px = image.rpc.PixelFromGeo(g);
+      cmin = std::min(cmin, px.x()), cmax = std::max(cmax, px.x());
+      rmin = std::min(rmin, px.y()), rmax = std::max(rmax, px.y());
+    }
+    if (cmax >= 0 && rmax >= 0 && cmin <= image.info.width && rmin <= image.info.height) return;
+  }
+  const Eigen::Vector3d center = to_geo.Apply(0.5 * (mesh.min + mesh.max));
+  char where[160];
+  std::snprintf(where, sizeof where, "lon %.6f, lat %.6f, h %.1f m", center.x(), center.y(), center.z());
+  ThrowError(ErrorCode::kInvalidArgument, "initial.mesh '" + mesh.file + "': outside the images' footprint (none of the " +
+                                              std::to_string(images.size()) + " images sees its box, centre at " + where +
+                                              ", within their RPCs' height range); wrong initial.crs?");
+}
+
+// The part of `box` that at least two images see at the mesh's mid height (their
+// footprints as boxes; `box` itself when none or one image localises).
+Box2d SeenByTwoImages(const Box2d& box, const InitialMesh& mesh, const std::vector<ImageFootprintModel>& images) {
+  const double h = 0.5 * (mesh.min.z() + mesh.max.z());
+  const CrsTransform to_plan(kWgs84Geographic3D, mesh.crs);
+  std::vector<Box2d> footprints;
+  for (const ImageFootprintModel& image : images) {
+    Box2d f{1e300, 1e300, -1e300, -1e300};
+    bool ok = true;
+    for (const auto& corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(image.info.width, 0),
+                               Eigen::Vector2d(image.info.width, image.info.height),
+                               Eigen::Vector2d(0, image.info.height)}) {
+      const auto lon_lat = image.rpc.LocalizeLonLat(corner, h);
+      if (!lon_lat) { ok = false; break; }
+      const Eigen::Vector3d p = to_plan.Apply(Eigen::Vector3d(lon_lat->x(), lon_lat->y(), h));
+      f = {std::min(f.xmin, p.x()), std::min(f.ymin, p.y()), std::max(f.xmax, p.x()), std::max(f.ymax, p.y())};
+    }
+    if (ok) footprints.push_back(f);
+  }
+  Box2d seen{1e300, 1e300, -1e300, -1e300};
+  for (size_t i = 0; i < footprints.size(); ++i)
+    for (size_t j = i + 1; j < footprints.size(); ++j) {
+      const Box2d& a = footprints[i];
+      const Box2d& b = footprints[j];
+      const Box2d both{std::max(a.xmin, b.xmin), std::max(a.ymin, b.ymin), std::min(a.xmax, b.xmax), std::min(a.ymax, b.ymax)};
+      if (both.xmin >= both.xmax || both.ymin >= both.ymax) continue;
+      seen = {std::min(seen.xmin, both.xmin), std::min(seen.ymin, both.ymin), std::max(seen.xmax, both.xmax),
+              std::max(seen.ymax, both.ymax)};
+    }
+  const Box2d out{std::max(box.xmin, seen.xmin), std::max(box.ymin, seen.ymin), std::min(box.xmax, seen.xmax),
+                  std::min(box.ymax, seen.ymax)};
+  if (seen.xmin >= seen.xmax || out.xmin >= out.xmax || out.ymin >= out.ymax) return box;
+  if (out.width() < box.width() || out.height() < box.height())
+    spdlog::info("plan: the initial mesh's extent cut to the {:.0f} x {:.0f} m two images see", out.width(), out.height());
+  return out;
+}
+
+// A mesh job's grid: north-up cells of spec.dsm_resolution_m (0: the images' median GSD
+// at the mesh's centre) over the mesh's extent in its (planning) CRS, on multiples of
+// the cell.
+DsmGrid MeshGrid(const JobSpec& spec, const InitialMesh& mesh, const std::vector<ImageFootprintModel>& images) {
+  double cell = spec.dsm_resolution_m;
+  if (cell == 0) {
+    const LocalFrame frame(CrsTransform(mesh.crs, kWgs84Geographic3D).Apply(0.5 * (mesh.min + mesh.max)));
+    std::vector<double> gsd;
+    for (const ImageFootprintModel& image : images) gsd.push_back(GroundSamplingDistance(image.rpc, frame));
+    SATMESH_CHECK(!gsd.empty(), ErrorCode::kInvalidInput, "images: none could be read for the grid's GSD");
+    std::nth_element(gsd.begin(), gsd.begin() + gsd.size() / 2, gsd.end());
+    cell = gsd[gsd.size() / 2];
+  }
+  DsmGrid grid;
+  grid.crs_wkt = mesh.crs;
+  const double x0 = std::floor(mesh.min.x() / cell) * cell, y1 = std::ceil(mesh.max.y() / cell) * cell;
+  grid.width = std::max(1, int(std::ceil((mesh.max.x() - x0) / cell)));
+  grid.height = std::max(1, int(std::ceil((y1 - mesh.min.y()) / cell)));
+  grid.geo_transform = {x0, cell, 0, y1, 0, -cell};
+  spdlog::info("plan: grid of {}x{} cells of {:.3f} m over the initial mesh", grid.width, grid.height, cell);
+  return grid;
+}
+
 // The tile grid over the AOI's cells, tiles of `tile_cells` cells, x from the west, y
 // from the south; each tile's memory estimated.
 void CutTiles(const JobSpec& spec, const std::vector<ImageFootprintModel>& images,
-              int tile_cells, JobPlan* plan_out) {
+              const std::optional<InitialMesh>& mesh, int tile_cells, JobPlan* plan_out) {
   JobPlan& plan = *plan_out;
   plan.tile_cells = tile_cells;
   plan.tiles.clear();
@@ -120,7 +223,9 @@ void CutTiles(const JobSpec& spec, const std::vector<ImageFootprintModel>& image
       tile.core = plan.dsm.BoxOf(tile.core_cells);
       tile.padded = plan.dsm.BoxOf(tile.padded_cells);
       if (!spec.aoi.polygon.empty() && !MakePolygon(BoxRing(tile.core))->Intersects(aoi.get())) continue;
-      tile.memory = EstimateTileMemory(spec, plan.dsm, images, tile.padded_cells);
+      std::pair<double, double> heights;
+      if (mesh) heights = HeightsOver(*mesh, tile.padded);
+      tile.memory = EstimateTileMemory(spec, plan.dsm, images, tile.padded_cells, mesh ? &heights : nullptr);
       plan.tiles.push_back(tile);
     }
   }
@@ -201,16 +306,30 @@ JobPlan PlanJob(const JobSpec& spec) {
   const std::string problem = spec.Check();
   SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "job: " + problem);
   JobPlan plan;
-  plan.dsm = ReadDsmGrid(spec.initial_dsm);
-  SATMESH_CHECK(!plan.dsm.crs_wkt.empty() && !CrsIsGeographic(plan.dsm.crs_wkt),
-                ErrorCode::kInvalidInput,
-                "initial.dsm: '" + spec.initial_dsm + "' is " +
-                    (plan.dsm.crs_wkt.empty() ? std::string("without a CRS")
-                                              : "in a geographic CRS (degrees)") +
-                    "; satmesh needs a projected CRS in metres (e.g. UTM: gdalwarp -t_srs EPSG:326zz)");
+  const std::vector<ImageFootprintModel> images = ReadImageFootprintModels(spec);
+  std::optional<InitialMesh> mesh;
+  if (!spec.initial_mesh.path.empty()) {
+    if (!spec.output_crs.empty()) CheckCrs("outputs.crs", spec.output_crs, kWgs84Geographic3D);
+    mesh = ReadInitialMesh(spec);
+  }
+  if (!spec.initial_dsm.empty()) {
+    plan.dsm = ReadDsmGrid(spec.initial_dsm);
+    SATMESH_CHECK(!plan.dsm.crs_wkt.empty() && !CrsIsGeographic(plan.dsm.crs_wkt),
+                  ErrorCode::kInvalidInput,
+                  "initial.dsm: '" + spec.initial_dsm + "' is " +
+                      (plan.dsm.crs_wkt.empty() ? std::string("without a CRS")
+                                                : "in a geographic CRS (degrees)") +
+                      "; satmesh needs a projected CRS in metres (e.g. UTM: gdalwarp -t_srs EPSG:326zz)");
+  }
+  const std::string source_crs = mesh ? mesh->crs : plan.dsm.crs_wkt;
+  if (mesh) {
+    mesh = InitialMeshIn(*mesh, spec.initial_dsm.empty() ? MeshPlanCrs(spec, *mesh) : plan.dsm.crs_wkt);
+    CheckMeshSeenByImages(*mesh, images);
+    if (spec.initial_dsm.empty()) plan.dsm = MeshGrid(spec, *mesh, images);
+  }
   CheckCrs("outputs.crs", spec.output_crs, plan.dsm.crs_wkt);
   CheckCrs("aoi.crs", spec.aoi.crs, plan.dsm.crs_wkt);
-  plan.output_crs = spec.output_crs.empty() ? plan.dsm.crs_wkt : spec.output_crs;
+  plan.output_crs = spec.output_crs.empty() ? CrsToWkt(source_crs) : spec.output_crs;
   const auto& gt = plan.dsm.geo_transform;
   const double cell = gt[1];
   const PixelWindow all{0, 0, plan.dsm.width, plan.dsm.height};
@@ -218,6 +337,8 @@ JobPlan PlanJob(const JobSpec& spec) {
   // AOI -> bounding cells (cells whose centre is inside the polygon's bbox).
   plan.aoi_polygon = spec.aoi.polygon.empty() ? BoxRing(plan.dsm.BoxOf(all))
                                               : AoiInDsmCrs(spec.aoi, plan.dsm);
+  if (spec.aoi.polygon.empty() && spec.initial_dsm.empty())  // a mesh beyond the images
+    plan.aoi_polygon = BoxRing(SeenByTwoImages(plan.dsm.BoxOf(all), *mesh, images));
   double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
   for (const auto& p : plan.aoi_polygon) {
     xmin = std::min(xmin, p.x()), xmax = std::max(xmax, p.x());
@@ -226,14 +347,16 @@ JobPlan PlanJob(const JobSpec& spec) {
   const int c0 = int(std::ceil((xmin - gt[0]) / cell - 0.5)), c1 = int(std::floor((xmax - gt[0]) / cell - 0.5)) + 1;
   const int r0 = int(std::ceil((ymax - gt[3]) / gt[5] - 0.5)), r1 = int(std::floor((ymin - gt[3]) / gt[5] - 0.5)) + 1;
   plan.aoi_cells = Intersect(PixelWindow{c0, r0, c1 - c0, r1 - r0}, plan.dsm.width, plan.dsm.height);
-  SATMESH_CHECK(plan.aoi_cells.width > 0 && plan.aoi_cells.height > 0, ErrorCode::kInvalidInput,
-                "aoi: does not overlap the initial DSM '" + spec.initial_dsm + "'");
+  SATMESH_CHECK(plan.aoi_cells.width > 0 && plan.aoi_cells.height > 0,
+                spec.initial_dsm.empty() ? ErrorCode::kInvalidArgument : ErrorCode::kInvalidInput,
+                spec.initial_dsm.empty()
+                    ? "initial.mesh '" + mesh->file + "': outside the aoi"
+                    : "aoi: does not overlap the initial DSM '" + spec.initial_dsm + "'");
 
   plan.overlap_cells = int(std::ceil(spec.tiling.overlap_m / cell - 1e-9));
   plan.memory_budget_mb = MemoryBudgetMb(spec.tiling);
-  const std::vector<ImageFootprintModel> images = ReadImageFootprintModels(spec);
   const PixelWindow& a = plan.aoi_cells;
-  CutTiles(spec, images, spec.tiling.tile_size_m > 0
+  CutTiles(spec, images, mesh, spec.tiling.tile_size_m > 0
                              ? std::max(1, int(std::lround(spec.tiling.tile_size_m / cell)))
                              : std::max(a.width, a.height),
            &plan);
@@ -259,7 +382,7 @@ JobPlan PlanJob(const JobSpec& spec) {
                    "tiles of {} cells", worst->Name(), worst->memory.peak_mb,
                    plan.memory_budget_mb, cells);
       plan.auto_tiled = true;
-      CutTiles(spec, images, cells, &plan);
+      CutTiles(spec, images, mesh, cells, &plan);
     }
   }
   double worst_mb = 0, worst_px = 0;

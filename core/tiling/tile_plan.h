@@ -1,5 +1,6 @@
 #pragma once
-// AOI -> square tiles with overlap on the initial DSM's grid. Reads only the DSM header.
+// AOI -> square tiles with overlap on the job's grid: the initial DSM's (reads only its
+// header), or for a job from a mesh alone a grid over the mesh's extent.
 #include <Eigen/Core>
 #include <array>
 #include <string>
@@ -66,6 +67,11 @@ struct JobPlan {
 // budget, else the largest square tiles that do; Error{kInvalidArgument} naming budget
 // and need when even a tile of 2 overlaps (at least 32 cells) would not fit. Throws Error{kInvalidArgument} naming the field for a bad spec,
 // Error{kInvalidInput} for a geographic or rotated DSM or an AOI outside it.
+// Mesh jobs (spec.initial_mesh; initial_mesh.h): the grid is the mesh's extent in the
+// planning CRS (MeshPlanCrs) at spec.dsm_resolution_m (0: the images' median GSD at the
+// mesh's centre), unless a DSM gives it; a bad mesh, one outside the AOI or outside the
+// images' footprint (no image sees its bounding box within the RPC's height range: a
+// wrong CRS) throws Error{kInvalidArgument} naming the file and the problem.
 JobPlan PlanJob(const JobSpec& spec);
 
 // Reads a window of cells of a DSM (nodata -> NaN); cells outside the raster are NaN.

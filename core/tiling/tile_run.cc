@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -125,6 +126,20 @@ std::vector<VertexScalar> ViewerScalars(const PointMesh& piece_dsm, const std::v
   return scalars;
 }
 
+// The debris thresholds of a tile's piece: 1 mm plus two steps of the .glb's Draco
+// position quantisation (the piece's extent / (2^bits - 1); rounding moves a vertex by
+// up to sqrt(3)/2 step), so no two vertices and no face collapse in the .glb either.
+MeshCleanOptions PieceCleanOptions(const PointMesh& padded, const Box2d& core) {
+  double zmin = 1e300, zmax = -1e300;
+  for (const auto& p : padded.points) zmin = std::min(zmin, p.z()), zmax = std::max(zmax, p.z());
+  const double extent = std::max({core.width(), core.height(), zmax - zmin});
+  const double step = extent / double((1 << MeshWriteOptions{}.draco_position_bits) - 1);
+  MeshCleanOptions options;
+  options.merge_distance_m += 2 * step;
+  options.min_face_height_m += 2 * step;
+  return options;
+}
+
 // Writes the trimmed piece: PLY in the output CRS, GLB in the tile's ENU frame (with
 // ViewerScalars against `initial`); fills the result's region and transform.
 void WritePiece(const PointMesh& piece_dsm, const PlannedTile& tile, const JobPlan& plan,
@@ -226,14 +241,7 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
 
     // The whole refined (padded) tile as a DSM: assembly takes its core cells, seams
     // compare neighbours' overlaps.
-    Dsm grid;
-    grid.width = tile.padded_cells.width;
-    grid.height = tile.padded_cells.height;
-    grid.geo_transform = plan.dsm.geo_transform;
-    grid.geo_transform[0] += tile.padded_cells.col0 * grid.geo_transform[1];
-    grid.geo_transform[3] += tile.padded_cells.row0 * grid.geo_transform[5];
-    grid.crs_wkt = plan.dsm.crs_wkt;
-    grid.z.assign(size_t(grid.width) * grid.height, 0.f);
+    const Dsm grid = TileGrid(plan, tile.padded_cells);
     const Dsm padded_dsm = DsmFromMesh(ToTriangleMesh(padded, plan.dsm.crs_wkt), grid);
     WriteAtomically(fs::path(out_dir) / TileDsmPath(tile), [&](const std::string& p) { WriteDsm(p, padded_dsm); });
     if (!local.height_sigma.empty()) {
@@ -243,10 +251,10 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
                       [&](const std::string& p) { WriteDsm(p, confidence); });
     }
 
-    const PointMesh piece = ClipToBox(padded, tile.core);
+    const PointMesh piece = ClipToBox(padded, tile.core, PieceCleanOptions(padded, tile.core));
     SATMESH_CHECK(!piece.faces.empty(), ErrorCode::kInvalidInput,
                   "tile " + tile.Name() + ": no refined surface inside the tile's core");
-    WritePiece(piece, tile, plan, ReadDsmWindow(spec.initial_dsm, tile.padded_cells), out_dir, &r);
+    WritePiece(piece, tile, plan, input.initial_heights, out_dir, &r);
     r.write_s = Seconds(t0);
     if (!keep_mesh) r.refine.mesh = TriangleMesh{};
     r.ok = true;

@@ -8,6 +8,7 @@
 
 #include "core/common/error.h"
 #include "core/common/progress.h"
+#include "core/mesh/mesh_clean.h"
 #include "core/refine/refine.h"
 #include "core/tiling/job_spec.h"
 #include "core/tiling/tile_plan.h"
@@ -53,9 +54,6 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
                    const std::string& out_dir, const Progress& progress = {},
                    bool keep_mesh = false);
 
-// The part of a mesh inside `box` (x, y; any z): faces crossing the box's edges are cut
-// exactly along them (Sutherland-Hodgman; a cut edge shared by two faces gives one
-// vertex), so neighbouring tiles' pieces meet along the edge without gap or overlap.
 // tiles/NAME.confidence.tif: the padded tile's ConfidenceFromHeightSigma on its DSM grid.
 std::string TileConfidencePath(const PlannedTile& t);
 
@@ -70,6 +68,17 @@ struct PointMesh {
   std::vector<Eigen::Vector3i> faces;
   std::vector<float> height_sigma;  // per point, or empty (TriangleMesh::height_sigma)
 };
-PointMesh ClipToBox(const PointMesh& mesh, const Box2d& box);
+
+// The part of a mesh inside `box` (x, y; any z): faces crossing the box's edges are cut
+// exactly along them (Sutherland-Hodgman; a cut edge shared by two faces gives one
+// vertex), so neighbouring tiles' pieces meet along the edge without gap or overlap.
+// 3D is kept (walls, overhangs: nothing is projected). The piece is free of debris
+// (CleanMesh with `clean`): a cut next to a vertex gives no sliver, three collinear
+// points of a cut polygon no zero-area triangle.
+PointMesh ClipToBox(const PointMesh& mesh, const Box2d& box, const MeshCleanOptions& clean = {});
+
+// CleanMesh on a PointMesh (through tile-local floats about its centroid, as written).
+PointMesh CleanPointMesh(const PointMesh& mesh, const MeshCleanOptions& options = {},
+                         MeshDebris* removed = nullptr);
 
 }  // namespace satmesh

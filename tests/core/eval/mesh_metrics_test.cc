@@ -134,3 +134,45 @@ TEST(EvaluateMesh3d, CropAndOptions) {
 
 }  // namespace
 }  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+TEST(UnderOverhang, GroundUnderASlabIsCoveredWallsAndRoofsAreNot) {
+  TriangleMesh m = MakeBoxScene();
+  // A 2 m deep balcony slab (both faces) along the building's south wall, 3 m up.
+  const auto add = [&](float x, float y, float z) {
+    m.vertices.emplace_back(x, y, z);
+    return int(m.vertices.size()) - 1;
+  };
+  const int a = add(7, 5, 3), b = add(13, 5, 3), c = add(13, 7, 3), d = add(7, 7, 3);
+  m.faces.emplace_back(a, b, c);  // top
+  m.faces.emplace_back(a, c, d);
+  m.faces.emplace_back(a, c, b);  // underside
+  m.faces.emplace_back(a, d, c);
+  SampleOptions options;
+  options.samples_per_m2 = 20;
+  const SurfaceSamples s = SampleSurface(m, options);
+  const std::vector<uint8_t> covered = UnderOverhang(m, s);
+  size_t ground_under = 0, ground_under_covered = 0, others_covered = 0, wall_above_covered = 0;
+  for (size_t k = 0; k < s.points.size(); ++k) {
+    const Eigen::Vector3d p = s.points[k] - m.origin;
+    const bool under_slab = p.x() > 7.01 && p.x() < 12.99 && p.y() > 5.01 && p.y() < 6.99;
+    if (std::abs(p.z()) < 1e-3 && under_slab) ++ground_under, ground_under_covered += covered[k];
+    else if (std::abs(p.z()) < 1e-3 && !(p.x() > 6.9 && p.x() < 13.1 && p.y() > 4.9 && p.y() < 7.1)) others_covered += covered[k];
+    // The south wall above the slab, and the roof, have nothing above them.
+    if (std::abs(p.y() - 7) < 1e-3 && p.z() > 3.2) wall_above_covered += covered[k];
+    if (std::abs(p.z() - 5) < 1e-3) others_covered += covered[k];
+  }
+  EXPECT_GT(ground_under, 100u);
+  EXPECT_EQ(ground_under_covered, ground_under);
+  EXPECT_EQ(others_covered, 0u);
+  EXPECT_EQ(wall_above_covered, 0u);
+  // The truth against itself: every covered sample is found.
+  const Mesh3dMetrics self = EvaluateMesh3d(m, m);
+  EXPECT_GT(self.under_overhang.num_truth_samples, 50u);
+  EXPECT_DOUBLE_EQ(self.under_overhang.completeness[0], 1.0);
+}
+
+}  // namespace
+}  // namespace satmesh

@@ -41,6 +41,32 @@ TEST(JobSpecFromJson, ReadsTheHoleFillingDistance) {
   EXPECT_NE(ErrorOf(job).find("initial.fill_holes_m"), std::string::npos) << ErrorOf(job);
 }
 
+TEST(JobSpecFromJson, ReadsAnInitialMeshWithItsCrsAndTheDsmResolution) {
+  json job = MinimalJob();
+  job["initial"] = {{"mesh", "runs/a/"}, {"crs", "EPSG:4978"}};
+  job["outputs"] = {{"dsm_resolution_m", 0.5}};
+  const JobSpec spec = proto::JobSpecFromJson(job, "/base");
+  EXPECT_EQ(spec.initial_mesh.path, "/base/runs/a/");
+  EXPECT_EQ(spec.initial_mesh.crs, "EPSG:4978");
+  EXPECT_TRUE(spec.initial_dsm.empty());
+  EXPECT_EQ(spec.dsm_resolution_m, 0.5);
+  job["initial"]["dsm"] = "dsm.tif";  // both: the DSM fills where the mesh has no surface
+  EXPECT_EQ(proto::JobSpecFromJson(job, "/base").initial_dsm, "/base/dsm.tif");
+}
+
+TEST(JobSpecFromJson, InitialNeedsADsmOrAMesh) {
+  json job = MinimalJob();
+  job["initial"] = json::object();
+  EXPECT_NE(ErrorOf(job).find("initial: needs dsm or mesh"), std::string::npos) << ErrorOf(job);
+  job["initial"] = {{"dsm", "dsm.tif"}, {"crs", "EPSG:4326"}};
+  EXPECT_NE(ErrorOf(job).find("initial.crs: is the initial mesh's CRS"), std::string::npos) << ErrorOf(job);
+  job["initial"] = {{"mesh", ""}};
+  EXPECT_NE(ErrorOf(job).find("initial.mesh: expected a non-empty string"), std::string::npos) << ErrorOf(job);
+  job["initial"] = {{"mesh", "m.ply"}};
+  job["outputs"] = {{"dsm_resolution_m", -1}};
+  EXPECT_NE(ErrorOf(job).find("outputs.dsm_resolution_m must be >= 0"), std::string::npos) << ErrorOf(job);
+}
+
 TEST(JobSpecFromJson, ReadsHowOftenHitMapsAreMadeAnew) {
   json job = MinimalJob();
   EXPECT_EQ(proto::JobSpecFromJson(job, "/base").refine.hit_maps_every, 2);

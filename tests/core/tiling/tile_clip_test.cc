@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <map>
 
 #include "core/tiling/tile_run.h"
@@ -73,6 +74,62 @@ TEST(ClipToBox, CarriesHeightSigmaInterpolatedAtTheCuts) {
   for (size_t i = 0; i < out.points.size(); ++i)
     EXPECT_NEAR(out.height_sigma[i], out.points[i].x(), 1e-5) << i;
   EXPECT_TRUE(ClipToBox(GridMesh(6), Box2d{1.3, 0.7, 4.6, 5.2}).height_sigma.empty());
+}
+
+}  // namespace
+}  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+double Area3d(const PointMesh& m) {
+  double area = 0;
+  for (const auto& f : m.faces)
+    area += 0.5 * (m.points[f[1]] - m.points[f[0]]).cross(m.points[f[2]] - m.points[f[0]]).norm();
+  return area;
+}
+
+// Quad a, b, c, d (counter-clockwise) as two triangles.
+void AddQuad(PointMesh* m, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+             const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
+  const int base = int(m->points.size());
+  for (const auto& p : {a, b, c, d}) m->points.push_back(p);
+  m->faces.emplace_back(base, base + 1, base + 2);
+  m->faces.emplace_back(base, base + 2, base + 3);
+}
+
+TEST(ClipToBox, KeepsWallsAndOverhangsIn3d) {
+  PointMesh m;
+  AddQuad(&m, {0, 5, 0}, {10, 5, 0}, {10, 5, 6}, {0, 5, 6});  // wall, 10 m x 6 m
+  AddQuad(&m, {0, 5, 4}, {10, 5, 4}, {10, 7, 4}, {0, 7, 4});  // balcony slab at 4 m
+  const PointMesh piece = ClipToBox(m, Box2d{2.5, 0, 7.5, 10});
+  EXPECT_NEAR(Area3d(piece), 5 * 6 + 5 * 2, 1e-9);  // half of each, nothing flattened
+  double zmax = 0;
+  for (const auto& p : piece.points) zmax = std::max(zmax, p.z());
+  EXPECT_EQ(zmax, 6);
+}
+
+TEST(ClipToBox, AWallOnASharedEdgeGoesToOneTile) {
+  PointMesh m;
+  AddQuad(&m, {5, 0, 0}, {5, 10, 0}, {5, 10, 6}, {5, 0, 6});  // in the plane x = 5
+  const size_t west = ClipToBox(m, Box2d{0, 0, 5, 10}).faces.size();
+  const size_t east = ClipToBox(m, Box2d{5, 0, 10, 10}).faces.size();
+  EXPECT_EQ(west + east, 2u);
+  EXPECT_EQ(east, 2u);  // tiles own their west and south edges
+}
+
+TEST(ClipToBox, CutsNextToVerticesLeaveNoDebris) {
+  // Box edges 0.05 mm from grid vertices: the cut points there are those vertices.
+  const PointMesh mesh = GridMesh(10);
+  const Box2d box{2.00005, 1.99995, 7.99995, 8.00005};
+  MeshDebris before;
+  CleanPointMesh(ClipToBox(mesh, box, MeshCleanOptions{1e-9, 1e-9}), {}, &before);
+  EXPECT_GT(before.Total(), 0u) << "the case does not make debris without cleaning";
+  MeshDebris after;
+  const PointMesh piece = ClipToBox(mesh, box);
+  CleanPointMesh(piece, {}, &after);
+  EXPECT_EQ(after.Total(), 0u) << after.ToString();
+  EXPECT_NEAR(AreaXy(piece), box.width() * box.height(), 1e-3);
 }
 
 }  // namespace

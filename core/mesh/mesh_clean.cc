@@ -1,0 +1,163 @@
+#include "core/mesh/mesh_clean.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+#include "core/common/error.h"
+
+namespace satmesh {
+namespace {
+
+// Each vertex -> the first vertex within `distance` of it (itself if none), through a
+// hash of cells of edge `distance`: a close vertex is in one of the 27 cells around.
+std::vector<int> MergeMap(const TriangleMesh& mesh, double distance, size_t* merged) {
+  const auto cell_of = [distance](float c) { return int64_t(std::floor(double(c) / distance)); };
+  const auto key = [](int64_t x, int64_t y, int64_t z) {
+    return uint64_t(x) * 73856093ULL ^ uint64_t(y) * 19349663ULL ^ uint64_t(z) * 83492791ULL;
+  };
+  std::unordered_map<uint64_t, std::vector<int>> cells;
+  cells.reserve(mesh.vertices.size());
+  std::vector<int> map(mesh.vertices.size());
+  const double d2 = distance * distance;
+  *merged = 0;
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Eigen::Vector3f& v = mesh.vertices[i];
+    const int64_t cx = cell_of(v.x()), cy = cell_of(v.y()), cz = cell_of(v.z());
+    int found = -1;
+    for (int64_t dx = -1; dx <= 1 && found < 0; ++dx)
+      for (int64_t dy = -1; dy <= 1 && found < 0; ++dy)
+        for (int64_t dz = -1; dz <= 1 && found < 0; ++dz) {
+          const auto it = cells.find(key(cx + dx, cy + dy, cz + dz));
+          if (it == cells.end()) continue;
+          for (int j : it->second)
+            if ((mesh.vertices[j] - v).cast<double>().squaredNorm() < d2) {
+              found = j;
+              break;
+            }
+        }
+    if (found >= 0) {
+      map[i] = found;
+      ++*merged;
+    } else {
+      map[i] = int(i);
+      cells[key(cx, cy, cz)].push_back(int(i));
+    }
+  }
+  return map;
+}
+
+bool Degenerate(const TriangleMesh& mesh, const Eigen::Vector3i& f, double min_height) {
+  if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) return true;
+  const Eigen::Vector3d a = mesh.vertices[f[0]].cast<double>(), b = mesh.vertices[f[1]].cast<double>(),
+                        c = mesh.vertices[f[2]].cast<double>();
+  const double twice_area = (b - a).cross(c - a).norm();
+  const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  return !(twice_area >= min_height * longest);  // NaN counts as degenerate
+}
+
+struct FaceKey {
+  std::array<int, 3> v;
+  bool operator==(const FaceKey& o) const { return v == o.v; }
+};
+struct FaceKeyHash {
+  size_t operator()(const FaceKey& k) const {
+    return (size_t(k.v[0]) * 73856093u) ^ (size_t(k.v[1]) * 19349663u) ^ (size_t(k.v[2]) * 83492791u);
+  }
+};
+
+// Faces kept (indices into mesh.faces, after the vertex map), counting what is dropped.
+std::vector<int> KeptFaces(const TriangleMesh& mesh, const std::vector<int>& map,
+                           const MeshCleanOptions& options, MeshDebris* debris) {
+  std::unordered_set<FaceKey, FaceKeyHash> seen;
+  seen.reserve(mesh.faces.size());
+  std::vector<int> kept;
+  kept.reserve(mesh.faces.size());
+  for (size_t i = 0; i < mesh.faces.size(); ++i) {
+    const Eigen::Vector3i f(map[mesh.faces[i][0]], map[mesh.faces[i][1]], map[mesh.faces[i][2]]);
+    if (Degenerate(mesh, f, options.min_face_height_m)) {
+      ++debris->degenerate_faces;
+      continue;
+    }
+    FaceKey key{{f[0], f[1], f[2]}};
+    std::sort(key.v.begin(), key.v.end());
+    if (!seen.insert(key).second) {
+      ++debris->duplicate_faces;
+      continue;
+    }
+    kept.push_back(int(i));
+  }
+  return kept;
+}
+
+MeshDebris Analyse(const TriangleMesh& mesh, const MeshCleanOptions& options,
+                   std::vector<int>* map, std::vector<int>* kept, std::vector<bool>* used) {
+  const std::string problem = options.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "MeshCleanOptions: " + problem);
+  ValidateMesh(mesh, "clean");
+  MeshDebris debris;
+  *map = MergeMap(mesh, options.merge_distance_m, &debris.close_vertices);
+  *kept = KeptFaces(mesh, *map, options, &debris);
+  used->assign(mesh.vertices.size(), false);
+  for (int i : *kept)
+    for (int k = 0; k < 3; ++k) (*used)[(*map)[mesh.faces[i][k]]] = true;
+  for (size_t v = 0; v < mesh.vertices.size(); ++v)
+    if ((*map)[v] == int(v) && !(*used)[v]) ++debris.unreferenced_vertices;
+  return debris;
+}
+
+}  // namespace
+
+std::string MeshCleanOptions::Check() const {
+  if (!(merge_distance_m > 0)) return "merge_distance_m must be > 0, got " + std::to_string(merge_distance_m);
+  if (!(min_face_height_m > 0)) return "min_face_height_m must be > 0, got " + std::to_string(min_face_height_m);
+  return "";
+}
+
+std::string MeshDebris::ToString() const {
+  return std::to_string(close_vertices) + " close vertices, " + std::to_string(degenerate_faces) +
+         " degenerate faces, " + std::to_string(duplicate_faces) + " duplicate faces, " +
+         std::to_string(unreferenced_vertices) + " unreferenced vertices";
+}
+
+MeshDebris FindDebris(const TriangleMesh& mesh, const MeshCleanOptions& options) {
+  std::vector<int> map, kept;
+  std::vector<bool> used;
+  return Analyse(mesh, options, &map, &kept, &used);
+}
+
+MeshDebris CleanMesh(TriangleMesh* mesh, const MeshCleanOptions& options) {
+  std::vector<int> map, kept;
+  std::vector<bool> used;
+  const MeshDebris debris = Analyse(*mesh, options, &map, &kept, &used);
+  if (debris.Total() == 0) return debris;
+  const bool sigma = mesh->height_sigma.size() == mesh->vertices.size();
+  std::vector<int> index(mesh->vertices.size(), -1);
+  std::vector<Eigen::Vector3f> vertices;
+  std::vector<float> height_sigma;
+  for (size_t v = 0; v < mesh->vertices.size(); ++v) {
+    if (map[v] != int(v) || !used[v]) continue;
+    index[v] = int(vertices.size());
+    vertices.push_back(mesh->vertices[v]);
+    if (sigma) height_sigma.push_back(mesh->height_sigma[v]);
+  }
+  std::vector<Eigen::Vector3i> faces;
+  faces.reserve(kept.size());
+  for (int i : kept) {
+    const Eigen::Vector3i& f = mesh->faces[i];
+    faces.emplace_back(index[map[f[0]]], index[map[f[1]]], index[map[f[2]]]);
+  }
+  mesh->vertices = std::move(vertices);
+  mesh->faces = std::move(faces);
+  if (sigma) mesh->height_sigma = std::move(height_sigma);
+  return debris;
+}
+
+}  // namespace satmesh

@@ -1,0 +1,351 @@
+// Jobs and their meshes on a tiny synthetic scene (36 m, tri-stereo; generated once):
+// outputs without debris on a many-tile job, jobs that start from a mesh (the scene's
+// truth mesh), chaining a result, and bad meshes refused naming file and problem.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <unistd.h>
+
+#include "core/dsm/dsm.h"
+#include "core/geo/crs.h"
+#include "core/mesh/mesh_clean.h"
+#include "core/mesh/mesh_io.h"
+#include "core/synth/scene_writer.h"
+#include "core/tiling/job.h"
+#include "core/tiling/tile_input.h"
+#include "proto/job_spec_json.h"
+#include "tests/scratch_dir.h"
+
+namespace satmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+class MeshJob : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    synth::SynthOptions o = synth::SynthPreset("small", 3);
+    o.city.aoi_size_m = 36;
+    o.city.ground_margin_m = 45;
+    o.city.building_margin_m = 5;
+    o.city.street_pitch_m = 40;
+    o.render.supersample = 1;
+    o.write_preview = false;
+    scene_ = (fs::temp_directory_path() / ("mesh_job_scene_" + std::to_string(::getpid()))).string();
+    fs::remove_all(scene_);
+    synth::GenerateScene(scene_, o);
+  }
+  static void TearDownTestSuite() { fs::remove_all(scene_); }
+
+  // Cheap refinement: one coarse level, few iterations.
+  static JobSpec Spec() {
+    JobSpec spec = proto::ReadJobFile(scene_ + "/job.json");
+    spec.refine.levels = 1;
+    spec.refine.iterations_per_level = 3;
+    spec.tiling.overlap_m = 3;
+    spec.tiling.workers = 2;
+    return spec;
+  }
+  static std::string OutDir(const std::string& name) {
+    const auto dir = fs::temp_directory_path() / ("mesh_job_" + name + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    testing::RemoveAtExit(dir);
+    return dir.string();
+  }
+  // Every mesh a job wrote: mesh.ply and each tile's .ply and .glb. (A .glb may repeat a
+  // vertex's position: Draco's edgebreaker splits a non-manifold vertex in two.)
+  static void ExpectNoDebris(const std::string& out) {
+    EXPECT_EQ(FindDebris(ReadMesh(out + "/mesh.ply")).ToString(), MeshDebris{}.ToString())
+        << "mesh.ply";
+    for (const auto& entry : fs::directory_iterator(fs::path(out) / "tiles")) {
+      const std::string ext = entry.path().extension().string();
+      if (ext != ".ply" && ext != ".glb") continue;
+      MeshDebris debris = FindDebris(ReadMesh(entry.path().string()));
+      if (ext == ".glb") debris.close_vertices = 0;
+      EXPECT_EQ(debris.ToString(), MeshDebris{}.ToString()) << entry.path();
+    }
+  }
+  // The scene's area (the initial DSM's extent), where the images look.
+  static std::vector<Eigen::Vector2d> SceneAoi() {
+    const Dsm dsm = ReadDsm(scene_ + "/initial/dsm.tif");
+    const double x0 = dsm.geo_transform[0], y1 = dsm.geo_transform[3];
+    const double x1 = x0 + dsm.width * dsm.geo_transform[1], y0 = y1 + dsm.height * dsm.geo_transform[5];
+    return {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+  }
+  static std::string scene_;
+};
+std::string MeshJob::scene_;
+
+TEST_F(MeshJob, ManyTilesFromTheDsmLeaveNoDebris) {
+  JobSpec spec = Spec();
+  spec.tiling.tile_size_m = 9;  // 4 x 4 tiles
+  const std::string out = OutDir("debris_dsm");
+  const JobOutputs o = RunJob(spec, out);
+  ASSERT_EQ(o.tiles.size(), 16u);
+  EXPECT_EQ(o.assembly.tiles_ok, 16);
+  ExpectNoDebris(out);
+}
+
+}  // namespace
+}  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+// The median |refined - truth| over the truth DSM's cells where both have a surface.
+double MedianAbsDsmError(const std::string& result_dsm, const std::string& truth_dsm) {
+  const Dsm result = ReadDsm(result_dsm), truth = ReadDsm(truth_dsm);
+  std::vector<double> diffs;
+  for (int j = 0; j < truth.height; ++j)
+    for (int i = 0; i < truth.width; ++i) {
+      const double x = truth.geo_transform[0] + (i + 0.5) * truth.geo_transform[1];
+      const double y = truth.geo_transform[3] + (j + 0.5) * truth.geo_transform[5];
+      const int ri = int(std::floor((x - result.geo_transform[0]) / result.geo_transform[1]));
+      const int rj = int(std::floor((y - result.geo_transform[3]) / result.geo_transform[5]));
+      if (ri < 0 || rj < 0 || ri >= result.width || rj >= result.height) continue;
+      const float a = result.at(ri, rj), b = truth.at(i, j);
+      if (std::isfinite(a) && std::isfinite(b)) diffs.push_back(std::abs(double(a) - b));
+    }
+  if (diffs.empty()) return INFINITY;
+  std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
+  return diffs[diffs.size() / 2];
+}
+
+TEST_F(MeshJob, WithoutAnAoiTheTilesCoverWhatTheImagesSee) {
+  // The truth mesh has 45 m of ground around the 36 m the images see: planned on the
+  // mesh's whole extent, the outer tiles would have no image.
+  JobSpec spec = Spec();
+  spec.initial_dsm.clear();
+  spec.initial_mesh.path = scene_ + "/truth/mesh.ply";
+  spec.tiling.tile_size_m = 18;
+  spec.refine.iterations_per_level = 1;
+  const JobOutputs o = RunJob(spec, OutDir("no_aoi"));
+  // The images (182 px of 0.3 m) see ~66 m of the mesh's 126 m.
+  EXPECT_LT(o.plan.aoi_cells.width * o.plan.dsm.geo_transform[1], 70);
+  EXPECT_LT(o.plan.aoi_cells.height * o.plan.dsm.geo_transform[1], 70);
+  for (const auto& t : o.tiles) EXPECT_TRUE(t.ok) << t.name << ": " << t.error;
+}
+
+TEST_F(MeshJob, StartsFromTheTruthMeshAndKeepsIt) {
+  JobSpec spec = Spec();
+  spec.initial_dsm.clear();
+  spec.initial_mesh.path = scene_ + "/truth/mesh.ply";
+  spec.tiling.tile_size_m = 18;  // 2 x 2 over the images' area (the mesh has 45 m more ground)
+  spec.aoi.polygon = SceneAoi();
+  const std::string out = OutDir("truth_start");
+  const JobOutputs o = RunJob(spec, out);
+  EXPECT_EQ(o.assembly.tiles_failed, 0);
+  ASSERT_GE(o.tiles.size(), 4u);
+  for (const auto& t : o.tiles) EXPECT_TRUE(t.ok) << t.name << ": " << t.error;
+  // The grid: the images' GSD (the scene's 0.3 m) over the mesh.
+  EXPECT_NEAR(o.plan.dsm.geo_transform[1], 0.3, 0.03);
+  ExpectNoDebris(out);
+  EXPECT_LT(MedianAbsDsmError(o.dsm_path, scene_ + "/truth/dsm.tif"), 0.1);
+}
+
+}  // namespace
+}  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+void WriteText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+// What PlanJob (the CLI's and the server's first step) says about a spec.
+std::string PlanError(const JobSpec& spec) {
+  try {
+    PlanJob(spec);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST_F(MeshJob, BadMeshesAreRefusedNamingFileAndProblem) {
+  const std::string dir = OutDir("bad_meshes");
+  fs::create_directories(dir);
+  JobSpec spec = Spec();
+  spec.initial_dsm.clear();
+  spec.aoi.polygon = SceneAoi();
+  const auto with_mesh = [&](const std::string& path) {
+    JobSpec s = spec;
+    s.initial_mesh.path = path;
+    return s;
+  };
+  const std::string ply_head = "ply\nformat ascii 1.0\ncomment crs EPSG:32617\n";
+  WriteText(dir + "/garbage.ply", "this is not a mesh\n");
+  WriteText(dir + "/nan.ply", ply_head + "element vertex 3\nproperty double x\nproperty double y\n"
+                              "property double z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                              "end_header\n0 0 0\nnan 1 0\n1 0 0\n3 0 1 2\n");
+  WriteText(dir + "/no_faces.ply", ply_head + "element vertex 1\nproperty double x\nproperty double y\n"
+                                   "property double z\nend_header\n0 0 0\n");
+  TriangleMesh truth = ReadMesh(scene_ + "/truth/mesh.ply");
+  for (auto& f : truth.faces) std::swap(f[1], f[2]);
+  WriteMesh(dir + "/inverted.ply", truth);
+  for (auto& f : truth.faces) std::swap(f[1], f[2]);
+  truth.crs.clear();
+  WriteMesh(dir + "/no_crs.obj", truth);
+  JobSpec no_crs = with_mesh(dir + "/no_crs.obj");
+  no_crs.output_crs.clear();
+
+  const std::vector<std::pair<JobSpec, std::string>> cases = {
+      {with_mesh(dir + "/missing.ply"), "initial.mesh: '" + dir + "/missing.ply' does not exist"},
+      {with_mesh(dir), "no " + dir + "/mesh.ply (a previous job's mesh.ply)"},
+      {with_mesh(dir + "/garbage.ply"), "initial.mesh '" + dir + "/garbage.ply': cannot be read"},
+      {with_mesh(dir + "/nan.ply"), "nan.ply"},
+      {with_mesh(dir + "/no_faces.ply"), "no_faces.ply': has no faces"},
+      {with_mesh(dir + "/inverted.ply"), "inverted.ply': its faces point down"},
+      {no_crs, "initial.crs: initial.mesh '" + dir + "/no_crs.obj' does not say its CRS"},
+  };
+  for (const auto& [s, expected] : cases)
+    EXPECT_NE(PlanError(s).find(expected), std::string::npos) << PlanError(s) << "\nexpected: " << expected;
+  EXPECT_NE(PlanError(with_mesh(dir + "/nan.ply")).find("non-finite"), std::string::npos)
+      << PlanError(with_mesh(dir + "/nan.ply"));
+
+  JobSpec limited = with_mesh(scene_ + "/truth/mesh.ply");
+  limited.initial_mesh.max_faces = 10;
+  EXPECT_NE(PlanError(limited).find("faces, more than the limit of 10"), std::string::npos) << PlanError(limited);
+  JobSpec wrong_crs = with_mesh(scene_ + "/truth/mesh.ply");
+  wrong_crs.initial_mesh.crs = "EPSG:32618";  // the next UTM zone: 600 km east
+  EXPECT_NE(PlanError(wrong_crs).find("outside the images' footprint"), std::string::npos) << PlanError(wrong_crs);
+  JobSpec unknown_crs = with_mesh(scene_ + "/truth/mesh.ply");
+  unknown_crs.initial_mesh.crs = "EPSG:99999999";
+  EXPECT_NE(PlanError(unknown_crs).find("initial.crs: 'EPSG:99999999' is not a usable CRS"), std::string::npos);
+  JobSpec elsewhere = with_mesh(scene_ + "/truth/mesh.ply");
+  for (auto& p : elsewhere.aoi.polygon) p.x() += 5000;
+  EXPECT_NE(PlanError(elsewhere).find("outside the aoi"), std::string::npos) << PlanError(elsewhere);
+  // The no-CRS OBJ is fine once its CRS is given.
+  JobSpec given = no_crs;
+  given.initial_mesh.crs = "EPSG:32617";
+  EXPECT_EQ(PlanError(given), "");
+}
+
+}  // namespace
+}  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+// Cells inside the AOI without a surface, away from its outer 2-cell band: a gap along a
+// seam would be a line of them.
+int InteriorHoles(const std::string& dsm_path) {
+  const Dsm dsm = ReadDsm(dsm_path);
+  int holes = 0;
+  for (int row = 2; row < dsm.height - 2; ++row)
+    for (int col = 2; col < dsm.width - 2; ++col) holes += !std::isfinite(dsm.at(col, row));
+  return holes;
+}
+
+TEST_F(MeshJob, ChainingAResultIsStable) {
+  JobSpec first = Spec();
+  first.tiling.tile_size_m = 18;
+  const std::string out_a = OutDir("chain_a"), out_b = OutDir("chain_b");
+  const JobOutputs a = RunJob(first, out_a);
+  ASSERT_EQ(a.assembly.tiles_failed, 0);
+  JobSpec second = first;
+  second.initial_dsm.clear();
+  second.initial_mesh.path = out_a + "/";  // the result directory: its mesh.ply
+  second.aoi.polygon = SceneAoi();
+  const JobOutputs b = RunJob(second, out_b);
+  ASSERT_EQ(b.assembly.tiles_failed, 0);
+  ExpectNoDebris(out_b);
+  const std::string truth = scene_ + "/truth/dsm.tif";
+  const double error_a = MedianAbsDsmError(a.dsm_path, truth), error_b = MedianAbsDsmError(b.dsm_path, truth);
+  EXPECT_LT(error_b, error_a * 1.02 + 0.005) << "first " << error_a << " m, chained " << error_b << " m";
+  EXPECT_LT(InteriorHoles(b.dsm_path), ReadDsm(b.dsm_path).width / 4);
+  EXPECT_EQ(b.assembly.seams.size(), 4u);
+  EXPECT_LT(b.assembly.seams_total.median_abs_m, 0.15);
+}
+
+TEST_F(MeshJob, AMeshInEcefOrGeographicCoordinatesGivesTheSameResult) {
+  JobSpec spec = Spec();
+  spec.initial_dsm.clear();
+  spec.aoi.polygon = SceneAoi();
+  spec.aoi.crs = "EPSG:32617";
+  spec.output_crs = "EPSG:32617";
+  spec.dsm_resolution_m = 0.3;  // the same grid (the GSD is taken at the mesh's centre)
+  spec.refine.iterations_per_level = 1;
+  spec.initial_mesh.path = scene_ + "/truth/mesh.ply";
+  const JobOutputs utm = RunJob(spec, OutDir("crs_utm"));
+  const TriangleMesh truth = ReadMesh(scene_ + "/truth/mesh.ply");
+  for (const char* crs : {"EPSG:4978", "EPSG:4326"}) {
+    std::vector<Eigen::Vector3d> points(truth.num_vertices());
+    for (size_t i = 0; i < points.size(); ++i) points[i] = truth.AbsoluteVertex(i);
+    CrsTransform(truth.crs, crs).Apply(&points);
+    TriangleMesh moved = truth;
+    moved.crs = crs;
+    moved.origin = points[0].array().round().matrix();
+    for (size_t i = 0; i < points.size(); ++i) moved.vertices[i] = (points[i] - moved.origin).cast<float>();
+    const std::string dir = OutDir(std::string("crs_") + (crs[5] == '4' && crs[8] == '7' ? "ecef" : "geo"));
+    fs::create_directories(dir);
+    JobSpec other = spec;
+    other.initial_mesh.path = dir + "/mesh_in.ply";
+    WriteMesh(other.initial_mesh.path, moved);
+    const JobOutputs o = RunJob(other, dir + "/out");
+    EXPECT_EQ(o.plan.dsm.geo_transform, utm.plan.dsm.geo_transform) << crs;
+    ASSERT_EQ(o.tiles.size(), utm.tiles.size()) << crs;
+    EXPECT_NEAR(double(o.assembly.faces), double(utm.assembly.faces), 0.02 * utm.assembly.faces) << crs;
+    const std::string truth_dsm = scene_ + "/truth/dsm.tif";
+    EXPECT_NEAR(MedianAbsDsmError(o.dsm_path, truth_dsm), MedianAbsDsmError(utm.dsm_path, truth_dsm), 0.01) << crs;
+  }
+}
+
+}  // namespace
+}  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+TEST_F(MeshJob, WithADsmTooTheDsmFillsWhereTheMeshHasNoSurface) {
+  // The truth mesh's west half, and the initial DSM.
+  const TriangleMesh truth = ReadMesh(scene_ + "/truth/mesh.ply");
+  PointMesh west;
+  for (size_t i = 0; i < truth.num_vertices(); ++i) west.points.push_back(truth.AbsoluteVertex(i));
+  west.faces = truth.faces;
+  const auto aoi = SceneAoi();
+  const double x_mid = 0.5 * (aoi[0].x() + aoi[1].x());
+  west = ClipToBox(west, Box2d{aoi[0].x() - 100, aoi[0].y() - 100, x_mid, aoi[2].y() + 100});
+  TriangleMesh half;
+  half.crs = truth.crs;
+  half.origin = truth.origin;
+  half.faces = west.faces;
+  for (const auto& p : west.points) half.vertices.push_back((p - half.origin).cast<float>());
+  const std::string dir = OutDir("mesh_and_dsm");
+  fs::create_directories(dir);
+  WriteMesh(dir + "/west.ply", half);
+
+  JobSpec spec = Spec();  // keeps initial.dsm: the plan is on its grid
+  spec.initial_mesh.path = dir + "/west.ply";
+  const JobPlan plan = PlanJob(spec);
+  ASSERT_EQ(plan.tiles.size(), 1u);
+  const TileInput input = PrepareTileInput(spec, plan, 0);
+  const size_t cells = input.initial_heights.z.size();
+  size_t empty = 0, west_cells = 0, west_match = 0;
+  const Dsm truth_dsm = ReadDsm(scene_ + "/truth/dsm.tif");
+  for (int j = 0; j < input.initial_heights.height; ++j)
+    for (int i = 0; i < input.initial_heights.width; ++i) {
+      const float z = input.initial_heights.at(i, j);
+      empty += !std::isfinite(z);
+      const double x = input.initial_heights.geo_transform[0] + (i + 0.5) * input.initial_heights.geo_transform[1];
+      if (x < x_mid - 1) {  // the mesh's half: the truth's heights, not the DSM's
+        const double y = input.initial_heights.geo_transform[3] + (j + 0.5) * input.initial_heights.geo_transform[5];
+        const int ti = int((x - truth_dsm.geo_transform[0]) / truth_dsm.geo_transform[1]);
+        const int tj = int((y - truth_dsm.geo_transform[3]) / truth_dsm.geo_transform[5]);
+        if (ti < 0 || tj < 0 || ti >= truth_dsm.width || tj >= truth_dsm.height || !std::isfinite(z)) continue;
+        ++west_cells;
+        west_match += std::abs(z - truth_dsm.at(ti, tj)) < 0.05;
+      }
+    }
+  EXPECT_LT(empty, cells / 50) << "the DSM did not fill the east half";
+  EXPECT_GT(input.filled_dsm_cells, cells / 3);  // about the east half (+ overlap)
+  EXPECT_LT(input.filled_dsm_cells, cells * 2 / 3);
+  EXPECT_GT(west_match, west_cells * 9 / 10);
+}
+
+}  // namespace
+}  // namespace satmesh
