@@ -233,12 +233,20 @@ CheckedImage CheckImage(const JobSpec& spec, size_t i, const std::vector<Checked
 void CheckJobInputs(const JobSpec& spec, const JobPlan& plan) {
   EnsureGdalInitialized();
   CPLErrorReset();
-  DatasetPtr dsm(GDALDataset::Open(spec.initial_dsm.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
-  SATMESH_CHECK(dsm != nullptr && dsm->GetRasterCount() >= 1, ErrorCode::kInvalidInput,
-                "initial.dsm: " + Quoted(spec.initial_dsm) + " is not a readable raster" + GdalMessage());
-  CheckDsmUnits(spec.initial_dsm, *dsm);
-  const std::pair<float, float> heights = AoiHeightRange(spec.initial_dsm, *dsm, plan.aoi_cells);
-  dsm.reset();
+  std::pair<float, float> heights{float(plan.mesh_zmin), float(plan.mesh_zmax)};  // mesh jobs
+  if (!spec.initial_dsm.empty()) {
+    DatasetPtr dsm(GDALDataset::Open(spec.initial_dsm.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
+    SATMESH_CHECK(dsm != nullptr && dsm->GetRasterCount() >= 1, ErrorCode::kInvalidInput,
+                  "initial.dsm: " + Quoted(spec.initial_dsm) + " is not a readable raster" + GdalMessage());
+    CheckDsmUnits(spec.initial_dsm, *dsm);
+    const std::pair<float, float> dsm_heights = AoiHeightRange(spec.initial_dsm, *dsm, plan.aoi_cells);
+    heights = std::isfinite(heights.first)
+                  ? std::pair<float, float>{std::min(heights.first, dsm_heights.first),
+                                            std::max(heights.second, dsm_heights.second)}
+                  : dsm_heights;
+  }
+  SATMESH_CHECK(std::isfinite(heights.first) && std::isfinite(heights.second), ErrorCode::kInvalidArgument,
+                "the job has neither initial.dsm nor initial.mesh");
   const std::vector<Eigen::Vector3d> aoi_geo = AoiGeo(plan, heights);
   std::vector<CheckedImage> images;
   for (size_t i = 0; i < spec.images.size(); ++i) {

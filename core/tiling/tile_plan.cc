@@ -325,6 +325,8 @@ JobPlan PlanJob(const JobSpec& spec) {
   if (mesh) {
     mesh = InitialMeshIn(*mesh, spec.initial_dsm.empty() ? MeshPlanCrs(spec, *mesh) : plan.dsm.crs_wkt);
     CheckMeshSeenByImages(*mesh, images);
+    plan.mesh_zmin = mesh->min.z();
+    plan.mesh_zmax = mesh->max.z();
     if (spec.initial_dsm.empty()) plan.dsm = MeshGrid(spec, *mesh, images);
   }
   CheckCrs("outputs.crs", spec.output_crs, plan.dsm.crs_wkt);

@@ -3,6 +3,7 @@
 // header), or for a job from a mesh alone a grid over the mesh's extent.
 #include <Eigen/Core>
 #include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,9 @@ struct JobPlan {
   std::vector<PlannedTile> tiles;  // tiles meeting the AOI, row by row from the south-west
   double memory_budget_mb = 0;   // one worker's budget (MemoryBudgetMb of the spec's tiling)
   bool auto_tiled = false;       // tiling.size_m was 0 and one tile would not fit the budget
+  // Mesh jobs: the initial mesh's lowest and highest point in dsm.crs_wkt (NaN otherwise).
+  double mesh_zmin = std::numeric_limits<double>::quiet_NaN();
+  double mesh_zmax = std::numeric_limits<double>::quiet_NaN();
   int IndexOf(int x, int y) const;  // -1 when (x, y) was not planned
 };
 
