@@ -55,48 +55,25 @@ std::string Resolve(const std::string& href, const std::string& base_dir) {
   return (std::filesystem::path(base_dir) / href).lexically_normal().string();
 }
 
+OptionValue OptionFromJson(const RefineOptionInfo& option, const json& v, const std::string& path) {
+  switch (option.type()) {
+    case OptionType::kBool: return Boolean(v, path);
+    case OptionType::kInt: return Integer(v, path);
+    case OptionType::kDouble: return Number(v, path);
+  }
+  Bad(path, "unknown option type");
+}
+
 void ParseOptions(const json& o, RefineOptions* r) {
   Object(o, "options");
   for (const auto& [key, v] : o.items()) {
     const std::string path = "options." + key;
-    if (key == "levels") r->levels = Integer(v, path);
-    else if (key == "max_coarse_edge_m") r->max_coarse_edge_m = Number(v, path);
-    else if (key == "iterations_per_level") r->iterations_per_level = Integer(v, path);
-    else if (key == "alpha") r->alpha = Number(v, path);
-    else if (key == "beta") r->beta = Number(v, path);
-    else if (key == "step") r->step = Number(v, path);
-    else if (key == "max_step_gsd") r->max_step_gsd = Number(v, path);
-    else if (key == "zncc_window_radius") r->zncc_window_radius = Integer(v, path);
-    else if (key == "min_window_valid") r->min_window_valid = Number(v, path);
-    else if (key == "variance_floor") r->variance_floor = Number(v, path);
-    else if (key == "noise_variance_factor") r->noise_variance_factor = Number(v, path);
-    else if (key == "visibility_tolerance_gsd") r->visibility_tolerance_gsd = Number(v, path);
-    else if (key == "min_ray_cos") r->min_ray_cos = Number(v, path);
-    else if (key == "virtual_camera_grid_px") r->virtual_camera_grid_px = Integer(v, path);
-    else if (key == "rasterize_hit_maps") r->rasterize_hit_maps = Boolean(v, path);
-    else if (key == "hit_maps_every") r->hit_maps_every = Integer(v, path);
-    else if (key == "coarse_edge_px") r->coarse_edge_px = Number(v, path);
-    else if (key == "remesh_coarse") r->remesh_coarse = Boolean(v, path);
-    else if (key == "alternate_directions") r->alternate_directions = Boolean(v, path);
-    else if (key == "restart_from_initial") r->restart_from_initial = Boolean(v, path);
-    else if (key == "normalize_by_pair_count") r->normalize_by_pair_count = Boolean(v, path);
-    else if (key == "min_height_confidence") r->min_height_confidence = Number(v, path);
-    else if (key == "height_sigma_gsd") r->height_sigma_gsd = Number(v, path);
-    else if (key == "hold_unseen") r->hold_unseen = Boolean(v, path);
-    else if (key == "hold_boundary_xy") r->hold_boundary_xy = Boolean(v, path);
-    else if (key == "estimate_bias") r->estimate_bias = Boolean(v, path);
-    else if (key == "min_pair_angle_deg") r->pairs.min_angle_deg = Number(v, path);
-    else if (key == "max_pair_angle_deg") r->pairs.max_angle_deg = Number(v, path);
-    else if (key == "optimal_pair_angle_deg") r->pairs.optimal_angle_deg = Number(v, path);
-    else if (key == "min_pair_overlap") r->pairs.min_overlap = Number(v, path);
-    else if (key == "pair_partners_per_view") r->pairs.partners_per_view = Integer(v, path);
-    else if (key == "max_pairs_per_image") r->pairs.max_pairs_per_image = Integer(v, path);
-    else if (key == "max_pairs") r->pairs.max_pairs = Integer(v, path);
-    else if (key == "min_contrast") r->pairs.min_contrast = Number(v, path);
-    else Bad(path, "unknown option");
+    const RefineOptionInfo* option = FindRefineOption(key);
+    if (option == nullptr) Bad(path, "unknown option");
+    option->Set(r, OptionFromJson(*option, v, path));
   }
-  const std::string problem = r->Check();
-  if (!problem.empty()) Bad("options", problem);
+  const std::string problem = r->Check();  // names the option by its wire name
+  if (!problem.empty()) ThrowError(ErrorCode::kInvalidArgument, "options." + problem);
 }
 
 Eigen::Vector2d Point(const json& j, const std::string& path) {
@@ -215,11 +192,39 @@ void ApplyOptionOverride(json* job, const std::string& key_equals_value) {
   const auto dot = key.find('.');
   if (key == "aoi" || key == "tiling" || key == "outputs" || key == "initial") {
     (*job)[key] = parsed;  // a whole top-level object, e.g. aoi={"bbox": [...]}
-  } else if (dot == std::string::npos) {
-    (*job)["options"][key] = parsed;  // a refinement option
+  } else if (dot == std::string::npos || key.substr(0, dot) == "options") {
+    const std::string name = dot == std::string::npos ? key : key.substr(dot + 1);
+    if (FindRefineOption(name) == nullptr) {
+      std::string names;
+      for (const RefineOptionInfo& option : RefineOptionTable())
+        names += (names.empty() ? "" : ", ") + std::string(option.name);
+      ThrowError(ErrorCode::kInvalidArgument,
+                 "--set " + key + ": unknown option; the refinement options are " + names);
+    }
+    (*job)["options"][name] = parsed;  // a refinement option
   } else {
     (*job)[key.substr(0, dot)][key.substr(dot + 1)] = parsed;  // e.g. tiling.size_m
   }
+}
+
+json RefineOptionSchema(const RefineOptionInfo& option) {
+  const bool integer = option.type() == OptionType::kInt;
+  const auto bound = [&](double b) { return integer ? json(int(b)) : json(b); };
+  json schema = {
+      {"type", option.type() == OptionType::kBool ? "boolean" : integer ? "integer" : "number"},
+      {"default", std::visit([](auto v) { return json(v); }, option.Default())},
+      {"description", option.help}};
+  const OptionRange& r = option.range;
+  if (r.min) schema[r.min_exclusive ? "exclusiveMinimum" : "minimum"] = bound(*r.min);
+  if (r.max) schema[r.max_exclusive ? "exclusiveMaximum" : "maximum"] = bound(*r.max);
+  return schema;
+}
+
+json RefineOptionsSchema() {
+  json properties = json::object();
+  for (const RefineOptionInfo& option : RefineOptionTable())
+    properties[std::string(option.name)] = RefineOptionSchema(option);
+  return properties;
 }
 
 }  // namespace satmesh::proto

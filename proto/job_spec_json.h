@@ -18,7 +18,14 @@ JobSpec ReadJobFile(const std::string& path);
 // options.levels, "tiling.size_m=100" sets job["tiling"]["size_m"], and
 // 'aoi={"bbox": [...]}' (or tiling=, outputs=, initial=) replaces that top-level object
 // ('initial={"mesh": "runs/a/"}' refines a previous result).
+// A key without a dot (or options.KEY) must be a refinement option (RefineOptionTable()).
 void ApplyOptionOverride(nlohmann::json* job, const std::string& key_equals_value);
+
+// The JSON Schema of one refinement option (type, default, minimum/maximum or their
+// exclusive forms, description), and of all of them: what job.schema.json's
+// "options"."properties" holds (a test keeps the file and the process description to it).
+nlohmann::json RefineOptionSchema(const RefineOptionInfo& option);
+nlohmann::json RefineOptionsSchema();
 
 // Outputs (core structs -> JSON). metrics.json: per tile and totals (+ the single-tile
 // refinement stats at top level, as before tiling). tileset.json: 3D Tiles 1.1.
