@@ -55,8 +55,8 @@ std::string Resolve(const std::string& href, const std::string& base_dir) {
   return (std::filesystem::path(base_dir) / href).lexically_normal().string();
 }
 
-OptionValue OptionFromJson(const RefineOptionInfo& option, const json& v, const std::string& path) {
-  switch (option.type()) {
+OptionValue OptionFromJson(OptionType type, const json& v, const std::string& path) {
+  switch (type) {
     case OptionType::kBool: return Boolean(v, path);
     case OptionType::kInt: return Integer(v, path);
     case OptionType::kDouble: return Number(v, path);
@@ -64,14 +64,22 @@ OptionValue OptionFromJson(const RefineOptionInfo& option, const json& v, const 
   Bad(path, "unknown option type");
 }
 
-void ParseOptions(const json& o, RefineOptions* r) {
-  Object(o, "options");
+// Sets the table's options from the object `o` at `path`; a key not in the table is
+// `unknown` ("unknown option"). The caller checks the result.
+template <typename Info, typename Options>
+void ParseOptionTable(const json& o, const std::string& path, const std::vector<Info>& table,
+                      const char* unknown, Options* options) {
+  Object(o, path);
   for (const auto& [key, v] : o.items()) {
-    const std::string path = "options." + key;
-    const RefineOptionInfo* option = FindRefineOption(key);
-    if (option == nullptr) Bad(path, "unknown option");
-    option->Set(r, OptionFromJson(*option, v, path));
+    const std::string key_path = path + "." + key;
+    const Info* option = FindOption(table, key);
+    if (option == nullptr) Bad(key_path, unknown);
+    option->Set(options, OptionFromJson(option->type(), v, key_path));
   }
+}
+
+void ParseOptions(const json& o, RefineOptions* r) {
+  ParseOptionTable(o, "options", RefineOptionTable(), "unknown option", r);
   const std::string problem = r->Check();  // names the option by its wire name
   if (!problem.empty()) ThrowError(ErrorCode::kInvalidArgument, "options." + problem);
 }
@@ -102,15 +110,41 @@ void ParseAoi(const json& a, JobAoi* aoi) {
 }
 
 void ParseTiling(const json& t, TilingOptions* tiling) {
-  Object(t, "tiling");
-  CheckKeys(t, "tiling", {"size_m", "overlap_m", "workers", "memory_budget_mb"});
-  if (t.contains("size_m")) tiling->tile_size_m = Number(t["size_m"], "tiling.size_m");
-  if (t.contains("overlap_m")) tiling->overlap_m = Number(t["overlap_m"], "tiling.overlap_m");
-  if (t.contains("workers")) tiling->workers = Integer(t["workers"], "tiling.workers");
-  if (t.contains("memory_budget_mb"))
-    tiling->memory_budget_mb = Number(t["memory_budget_mb"], "tiling.memory_budget_mb");
-  const std::string problem = tiling->Check();
-  if (!problem.empty()) Bad("tiling", problem);
+  ParseOptionTable(t, "tiling", TilingOptionTable(), "unknown field", tiling);
+  const std::string problem = tiling->Check();  // "tiling.<wire name> must be ..."
+  if (!problem.empty()) ThrowError(ErrorCode::kInvalidArgument, problem);
+}
+
+template <typename Info>
+json OptionSchema(const Info& option) {
+  const bool integer = option.type() == OptionType::kInt;
+  const auto bound = [&](double b) { return integer ? json(int(b)) : json(b); };
+  json schema = {
+      {"type", option.type() == OptionType::kBool ? "boolean" : integer ? "integer" : "number"},
+      {"default", std::visit([](auto v) { return json(v); }, option.Default())},
+      {"description", option.help}};
+  const OptionRange& r = option.range;
+  if (r.min) schema[r.min_exclusive ? "exclusiveMinimum" : "minimum"] = bound(*r.min);
+  if (r.max) schema[r.max_exclusive ? "exclusiveMaximum" : "maximum"] = bound(*r.max);
+  return schema;
+}
+
+template <typename Info>
+json OptionTableSchema(const std::vector<Info>& table) {
+  json properties = json::object();
+  for (const Info& option : table) properties[std::string(option.name)] = OptionSchema(option);
+  return properties;
+}
+
+// Throws for a --set key whose option is not in the table, listing the table's names.
+template <typename Info>
+void RequireOption(const std::vector<Info>& table, const std::string& name, const std::string& key,
+                   const std::string& what) {
+  if (FindOption(table, name) != nullptr) return;
+  std::string names;
+  for (const Info& option : table) names += (names.empty() ? "" : ", ") + std::string(option.name);
+  ThrowError(ErrorCode::kInvalidArgument,
+             "--set " + key + ": unknown option; the " + what + " options are " + names);
 }
 
 }  // namespace
@@ -194,37 +228,16 @@ void ApplyOptionOverride(json* job, const std::string& key_equals_value) {
     (*job)[key] = parsed;  // a whole top-level object, e.g. aoi={"bbox": [...]}
   } else if (dot == std::string::npos || key.substr(0, dot) == "options") {
     const std::string name = dot == std::string::npos ? key : key.substr(dot + 1);
-    if (FindRefineOption(name) == nullptr) {
-      std::string names;
-      for (const RefineOptionInfo& option : RefineOptionTable())
-        names += (names.empty() ? "" : ", ") + std::string(option.name);
-      ThrowError(ErrorCode::kInvalidArgument,
-                 "--set " + key + ": unknown option; the refinement options are " + names);
-    }
+    RequireOption(RefineOptionTable(), name, key, "refinement");
     (*job)["options"][name] = parsed;  // a refinement option
   } else {
+    if (key.substr(0, dot) == "tiling")
+      RequireOption(TilingOptionTable(), key.substr(dot + 1), key, "tiling");
     (*job)[key.substr(0, dot)][key.substr(dot + 1)] = parsed;  // e.g. tiling.size_m
   }
 }
 
-json RefineOptionSchema(const RefineOptionInfo& option) {
-  const bool integer = option.type() == OptionType::kInt;
-  const auto bound = [&](double b) { return integer ? json(int(b)) : json(b); };
-  json schema = {
-      {"type", option.type() == OptionType::kBool ? "boolean" : integer ? "integer" : "number"},
-      {"default", std::visit([](auto v) { return json(v); }, option.Default())},
-      {"description", option.help}};
-  const OptionRange& r = option.range;
-  if (r.min) schema[r.min_exclusive ? "exclusiveMinimum" : "minimum"] = bound(*r.min);
-  if (r.max) schema[r.max_exclusive ? "exclusiveMaximum" : "maximum"] = bound(*r.max);
-  return schema;
-}
-
-json RefineOptionsSchema() {
-  json properties = json::object();
-  for (const RefineOptionInfo& option : RefineOptionTable())
-    properties[std::string(option.name)] = RefineOptionSchema(option);
-  return properties;
-}
+json RefineOptionsSchema() { return OptionTableSchema(RefineOptionTable()); }
+json TilingOptionsSchema() { return OptionTableSchema(TilingOptionTable()); }
 
 }  // namespace satmesh::proto

@@ -2,38 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <string>
-#include <type_traits>
-
-#include "core/common/error.h"
 
 namespace satmesh {
 namespace {
 
-OptionRange AtLeast(double min) { return {min, std::nullopt, false, false}; }
-OptionRange Above(double min) { return {min, std::nullopt, true, false}; }
-OptionRange In(double min, double max) { return {min, max, false, false}; }         // [min, max]
-OptionRange Open(double min, double max) { return {min, max, true, true}; }         // (min, max)
-OptionRange AboveTo(double min, double max) { return {min, max, true, false}; }     // (min, max]
-OptionRange FromBelow(double min, double max) { return {min, max, false, true}; }   // [min, max)
-
-template <typename T>
-constexpr OptionType TypeOf() {
-  if constexpr (std::is_same_v<T, bool>) return OptionType::kBool;
-  else if constexpr (std::is_same_v<T, int>) return OptionType::kInt;
-  else return OptionType::kDouble;
-}
-
-// The field a member pointer of RefineOptionInfo::Field names, and its type.
-template <typename T> T& FieldOf(RefineOptions& o, T RefineOptions::*m) { return o.*m; }
-template <typename T> T& FieldOf(RefineOptions& o, T PairOptions::*m) { return o.pairs.*m; }
-template <typename T> T FieldOf(const RefineOptions& o, T RefineOptions::*m) { return o.*m; }
-template <typename T> T FieldOf(const RefineOptions& o, T PairOptions::*m) { return o.pairs.*m; }
-template <typename M> struct FieldTypeOf;
-template <typename T, typename S> struct FieldTypeOf<T S::*> { using type = T; };
-template <typename M> using FieldType = typename FieldTypeOf<M>::type;
-
+using Range = OptionRange;
 using R = RefineOptions;
 using P = PairOptions;
 
@@ -49,51 +23,44 @@ std::string CheckPairAngles(const PairOptions& p) {
   return "";
 }
 
-// The first out-of-range option of `options` (only the pair options with pairs_only).
-std::string CheckRanges(const RefineOptions& options, bool pairs_only) {
-  for (const RefineOptionInfo& option : RefineOptionTable()) {
-    if (pairs_only && !option.is_pair_option()) continue;
-    std::string problem = option.CheckValue(options);
-    if (!problem.empty()) return problem;
-  }
-  return "";
-}
-
 }  // namespace
 
 const std::vector<RefineOptionInfo>& RefineOptionTable() {
   static const std::vector<RefineOptionInfo> table = {
-      {"levels", &R::levels, In(-1, 6),
+      {"levels", &R::levels, Range::In(-1, 6),
        "coarsest pyramid level L (images at 1/2^L); -1: from the GSD and the initial surface's "
        "cell (the coarse triangle edge stays under max(max_coarse_edge_m, cell))"},
-      {"max_coarse_edge_m", &R::max_coarse_edge_m, Above(0),
+      {"max_coarse_edge_m", &R::max_coarse_edge_m, Range::Above(0),
        "levels -1: bound of the coarse mesh's triangle edge, m"},
-      {"iterations_per_level", &R::iterations_per_level, In(0, 1000), "gradient steps per level"},
-      {"alpha", &R::alpha, AtLeast(0), "weight of the photometric term (ZNCC)"},
-      {"beta", &R::beta, AtLeast(0), "weight of the thin-plate term (homogenised by 1/GSD^2)"},
-      {"step", &R::step, Above(0), "gradient step, in units of (level GSD)^2"},
-      {"max_step_gsd", &R::max_step_gsd, Above(0),
+      {"iterations_per_level", &R::iterations_per_level, Range::In(0, 1000),
+       "gradient steps per level"},
+      {"alpha", &R::alpha, Range::AtLeast(0), "weight of the photometric term (ZNCC)"},
+      {"beta", &R::beta, Range::AtLeast(0),
+       "weight of the thin-plate term (homogenised by 1/GSD^2)"},
+      {"step", &R::step, Range::Above(0), "gradient step, in units of (level GSD)^2"},
+      {"max_step_gsd", &R::max_step_gsd, Range::Above(0),
        "clamp of one vertex's move per iteration, in level GSD"},
-      {"zncc_window_radius", &R::zncc_window_radius, In(1, 7), "ZNCC window radius r: (2r+1)^2 pixels"},
-      {"min_window_valid", &R::min_window_valid, AboveTo(0, 1),
+      {"zncc_window_radius", &R::zncc_window_radius, Range::In(1, 7),
+       "ZNCC window radius r: (2r+1)^2 pixels"},
+      {"min_window_valid", &R::min_window_valid, Range::AboveTo(0, 1),
        "min fraction of valid pixels in a ZNCC window"},
-      {"variance_floor", &R::variance_floor, Above(0),
+      {"variance_floor", &R::variance_floor, Range::Above(0),
        "floor of the ZNCC windows' variances (unit-range images)"},
-      {"noise_variance_factor", &R::noise_variance_factor, AtLeast(0),
+      {"noise_variance_factor", &R::noise_variance_factor, Range::AtLeast(0),
        "the ZNCC variance floor is raised to this times the images' estimated noise variance at "
        "the level; 0: fixed floor"},
-      {"visibility_tolerance_gsd", &R::visibility_tolerance_gsd, Above(0),
+      {"visibility_tolerance_gsd", &R::visibility_tolerance_gsd, Range::Above(0),
        "depth test tolerance, in level GSD"},
-      {"min_ray_cos", &R::min_ray_cos, FromBelow(0, 1),
+      {"min_ray_cos", &R::min_ray_cos, Range::FromBelow(0, 1),
        "pixels whose ray meets the face at |cos| below this are ignored (grazing views)"},
-      {"virtual_camera_grid_px", &R::virtual_camera_grid_px, AtLeast(1),
+      {"virtual_camera_grid_px", &R::virtual_camera_grid_px, Range::AtLeast(1),
        "spacing of exactly localised rays, in level pixels"},
       {"rasterize_hit_maps", &R::rasterize_hit_maps, {},
        "hit maps by z-buffer rasterization through the RFM; false: Embree ray casting"},
-      {"hit_maps_every", &R::hit_maps_every, In(1, 20),
+      {"hit_maps_every", &R::hit_maps_every, Range::In(1, 20),
        "hit maps made anew every N iterations (and at a level's first and last); in between, "
        "each pixel keeps its face and its hit point follows the moving face"},
-      {"coarse_edge_px", &R::coarse_edge_px, Above(0),
+      {"coarse_edge_px", &R::coarse_edge_px, Range::Above(0),
        "edge length of the coarse mesh at the coarsest level, in level pixels"},
       {"remesh_coarse", &R::remesh_coarse, {},
        "isotropic remeshing of the coarse mesh; false: keep the input's triangles"},
@@ -105,10 +72,10 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "(half the work); false: both directions every iteration"},
       {"normalize_by_pair_count", &R::normalize_by_pair_count, {},
        "each vertex's photometric gradient is divided by the number of pair-directions that saw it"},
-      {"min_height_confidence", &R::min_height_confidence, AboveTo(0, 1),
+      {"min_height_confidence", &R::min_height_confidence, Range::AboveTo(0, 1),
        "floor of a vertex's height confidence (see height_sigma_gsd); the thin-plate weight is "
        "divided by it; 1: off"},
-      {"height_sigma_gsd", &R::height_sigma_gsd, AtLeast(0),
+      {"height_sigma_gsd", &R::height_sigma_gsd, Range::AtLeast(0),
        "> 0: a vertex's height confidence from the images (Fisher information of its pixels under "
        "the images' noise): 1 where they determine its height to within this many level GSDs "
        "(1 sigma), (this / sigma)^2 below; 0: from the pairs' geometry"},
@@ -119,99 +86,39 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"estimate_bias", &R::estimate_bias, {},
        "estimate per-image RPC bias shifts over the initial surface before refining (added to "
        "images[].bias)"},
-      {"min_pair_angle_deg", &P::min_angle_deg, Open(0, 90),
+      {"min_pair_angle_deg", &P::min_angle_deg, Range::Open(0, 90),
        "pairs converging less are not used (the height is not constrained)"},
-      {"max_pair_angle_deg", &P::max_angle_deg, Open(0, 90),
+      {"max_pair_angle_deg", &P::max_angle_deg, Range::Open(0, 90),
        "pairs converging more are not used; above min_pair_angle_deg"},
-      {"optimal_pair_angle_deg", &P::optimal_angle_deg, Open(0, 90),
+      {"optimal_pair_angle_deg", &P::optimal_angle_deg, Range::Open(0, 90),
        "angle from which height precision no longer limits a pair; wider pairs score lower for "
        "occlusion; in [min_pair_angle_deg, max_pair_angle_deg]"},
-      {"min_pair_overlap", &P::min_overlap, In(0, 1),
+      {"min_pair_overlap", &P::min_overlap, Range::In(0, 1),
        "fraction of the surface both images of a pair must see"},
-      {"pair_partners_per_view", &P::partners_per_view, AtLeast(1),
+      {"pair_partners_per_view", &P::partners_per_view, Range::AtLeast(1),
        "pairs each view gets where candidates allow"},
-      {"max_pairs_per_image", &P::max_pairs_per_image, AtLeast(1), "cap on the pairs of one image"},
-      {"max_pairs", &P::max_pairs, AtLeast(0), "pairs in all; 0: 1.5 per view, at least 10"},
-      {"min_contrast", &P::min_contrast, AtLeast(0),
+      {"max_pairs_per_image", &P::max_pairs_per_image, Range::AtLeast(1),
+       "cap on the pairs of one image"},
+      {"max_pairs", &P::max_pairs, Range::AtLeast(0), "pairs in all; 0: 1.5 per view, at least 10"},
+      {"min_contrast", &P::min_contrast, Range::AtLeast(0),
        "images whose normalised standard deviation is below this are not used"},
   };
   return table;
 }
 
 const RefineOptionInfo* FindRefineOption(std::string_view name) {
-  for (const RefineOptionInfo& option : RefineOptionTable())
-    if (option.name == name) return &option;
-  return nullptr;
-}
-
-std::string OptionValueText(const OptionValue& v) {
-  if (const bool* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
-  if (const int* i = std::get_if<int>(&v)) return std::to_string(*i);
-  std::ostringstream out;
-  out << std::get<double>(v);
-  return out.str();
-}
-
-OptionType RefineOptionInfo::type() const {
-  return std::visit([](auto member) { return TypeOf<FieldType<decltype(member)>>(); }, field);
-}
-
-bool RefineOptionInfo::is_pair_option() const {
-  return std::holds_alternative<int P::*>(field) || std::holds_alternative<double P::*>(field);
-}
-
-OptionValue RefineOptionInfo::Get(const RefineOptions& options) const {
-  return std::visit([&](auto member) { return OptionValue(FieldOf(options, member)); }, field);
-}
-
-void RefineOptionInfo::Set(RefineOptions* options, OptionValue v) const {
-  std::visit(
-      [&](auto member) {
-        using T = FieldType<decltype(member)>;
-        if constexpr (std::is_same_v<T, double>)
-          if (const int* i = std::get_if<int>(&v)) v = double(*i);
-        SATMESH_CHECK(std::holds_alternative<T>(v), ErrorCode::kInternal,
-                      std::string(name) + ": a value of another type");
-        FieldOf(*options, member) = std::get<T>(v);
-      },
-      field);
-}
-
-std::string RefineOptionInfo::RangeText() const {
-  const auto& [min, max, min_exclusive, max_exclusive] = range;
-  std::ostringstream text;
-  if (min && max) {
-    text << (min_exclusive ? "(" : "[") << OptionValueText(*min) << ", " << OptionValueText(*max)
-         << (max_exclusive ? ")" : "]");
-  } else if (min) {
-    text << (min_exclusive ? "> " : ">= ") << OptionValueText(*min);
-  } else if (max) {
-    text << (max_exclusive ? "< " : "<= ") << OptionValueText(*max);
-  }
-  return text.str();
-}
-
-std::string RefineOptionInfo::CheckValue(const RefineOptions& options) const {
-  const OptionValue v = Get(options);
-  if (std::holds_alternative<bool>(v)) return "";
-  const double x = std::holds_alternative<int>(v) ? std::get<int>(v) : std::get<double>(v);
-  const auto& [min, max, min_exclusive, max_exclusive] = range;
-  const bool above_min = !min || (min_exclusive ? x > *min : x >= *min);
-  const bool below_max = !max || (max_exclusive ? x < *max : x <= *max);
-  if (above_min && below_max && !std::isnan(x)) return "";
-  return std::string(name) + " must be " + (min && max ? "in " : "") + RangeText() + ", got " +
-         OptionValueText(v);
+  return FindOption(RefineOptionTable(), name);
 }
 
 std::string PairOptions::Check() const {
   RefineOptions options;
   options.pairs = *this;
-  const std::string problem = CheckRanges(options, /*pairs_only=*/true);
+  const std::string problem = CheckOptionRanges(RefineOptionTable(), options, /*nested_only=*/true);
   return problem.empty() ? CheckPairAngles(*this) : problem;
 }
 
 std::string RefineOptions::Check() const {
-  const std::string problem = CheckRanges(*this, /*pairs_only=*/false);
+  const std::string problem = CheckOptionRanges(RefineOptionTable(), *this);
   return problem.empty() ? CheckPairAngles(pairs) : problem;
 }
 

@@ -3,11 +3,11 @@
 // scenes from `satmesh synth` (see BENCHMARKS.md for the runs that chose them). Each
 // option's wire name, valid range and one-line help: RefineOptionTable() (refine_options.cc);
 // the comments here say what the fields mean and their units.
-#include <optional>
 #include <string>
 #include <string_view>
-#include <variant>
 #include <vector>
+
+#include "core/common/option_table.h"
 
 namespace satmesh {
 
@@ -91,45 +91,15 @@ struct RefineOptions {
   std::string Check() const;
 };
 
-// One refinement option, declared once in RefineOptionTable() (refine_options.cc): its wire
-// name (the job's "options" object in proto/job.schema.json, `--set name=value`, every
-// message of Check()), the field it sets (its default is the field's initializer), its
-// valid range and a one-line help. The parser, the CLI and Check() iterate the table; a
-// test holds the schema and the process description to it.
-enum class OptionType { kBool, kInt, kDouble };
-using OptionValue = std::variant<bool, int, double>;
-
-struct OptionRange {  // a bound absent: none on that side
-  std::optional<double> min, max;
-  bool min_exclusive = false, max_exclusive = false;
-};
-
-struct RefineOptionInfo {
-  using Field = std::variant<bool RefineOptions::*, int RefineOptions::*, double RefineOptions::*,
-                             int PairOptions::*, double PairOptions::*>;
-  std::string_view name;  // wire name
-  Field field;            // a member of RefineOptions, or of its `pairs`
-  OptionRange range;      // empty for booleans
-  std::string_view help;  // one line; the schema's "description"
-
-  OptionType type() const;
-  bool is_pair_option() const;  // a field of PairOptions
-  OptionValue Get(const RefineOptions& options) const;
-  OptionValue Default() const { return Get(RefineOptions()); }
-  // v must be of type() (an int is taken for a double option).
-  void Set(RefineOptions* options, OptionValue v) const;
-  // "[1, 20]", "(0, 1]", ">= 0", "> 0"; "" for none.
-  std::string RangeText() const;
-  // "" or "<name> must be in <range>, got <value>".
-  std::string CheckValue(const RefineOptions& options) const;
-};
+// Each refinement option declared once (core/common/option_table.h): wire name (the job's
+// "options" in proto/job.schema.json, `--set name=value`, every message of Check()), field,
+// range, one-line help. The options of `pairs` are written flat on the wire.
+using RefineOptionInfo = OptionInfo<RefineOptions, PairOptions, &RefineOptions::pairs>;
 
 // Every refinement option, in the schema's order.
 const std::vector<RefineOptionInfo>& RefineOptionTable();
 // nullptr for a name not in the table.
 const RefineOptionInfo* FindRefineOption(std::string_view name);
-// A value as the messages and the CLI write it: 2, 0.5, 1e-04, true.
-std::string OptionValueText(const OptionValue& v);
 
 // The coarsest level: options.levels, or for -1 the largest L in [0, 3] whose coarse
 // triangle edge (coarse_edge_px x gsd_m x 2^L) is at most max(max_coarse_edge_m,

@@ -1,5 +1,7 @@
 // The refinement options' table (RefineOptionTable): one declaration per option, from
 // which Check() and the wire format are made.
+#include "core/refine/refine_options.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,8 +9,6 @@
 #include <set>
 #include <string>
 #include <vector>
-
-#include "core/refine/refine_options.h"
 
 namespace satmesh {
 namespace {
@@ -38,7 +38,8 @@ void ExpectOnlyWireNames(const std::string& message) {
   const std::set<std::string> names = WireNames();
   EXPECT_EQ(message.find("pairs."), std::string::npos) << message;
   const std::regex word("[a-z0-9]+(_[a-z0-9]+)+");
-  for (auto it = std::sregex_iterator(message.begin(), message.end(), word); it != std::sregex_iterator(); ++it)
+  for (auto it = std::sregex_iterator(message.begin(), message.end(), word);
+       it != std::sregex_iterator(); ++it)
     EXPECT_TRUE(names.count(it->str())) << "'" << it->str() << "' in: " << message;
 }
 
@@ -49,9 +50,10 @@ TEST(RefineOptionTable, NamesAreUniqueAndEachOptionSetsItsOwnField) {
     EXPECT_EQ(option.help.find('\n'), std::string_view::npos) << option.name;
     RefineOptions changed;
     const OptionValue before = option.Get(changed);
-    const OptionValue after = std::holds_alternative<bool>(before)  ? OptionValue(!std::get<bool>(before))
-                              : std::holds_alternative<int>(before) ? OptionValue(std::get<int>(before) + 7)
-                                                                    : OptionValue(std::get<double>(before) + 7.5);
+    const OptionValue after =
+        std::holds_alternative<bool>(before)  ? OptionValue(!std::get<bool>(before))
+        : std::holds_alternative<int>(before) ? OptionValue(std::get<int>(before) + 7)
+                                              : OptionValue(std::get<double>(before) + 7.5);
     option.Set(&changed, after);
     EXPECT_EQ(option.Get(changed), after) << option.name;
     for (const RefineOptionInfo& other : RefineOptionTable())
@@ -64,7 +66,8 @@ TEST(RefineOptionTable, NamesAreUniqueAndEachOptionSetsItsOwnField) {
 TEST(RefineOptionTable, DefaultsAreTheStructsAndInRange) {
   const RefineOptions defaults;
   EXPECT_EQ(FindRefineOption("levels")->Default(), OptionValue(defaults.levels));
-  EXPECT_EQ(FindRefineOption("min_pair_angle_deg")->Default(), OptionValue(defaults.pairs.min_angle_deg));
+  EXPECT_EQ(FindRefineOption("min_pair_angle_deg")->Default(),
+            OptionValue(defaults.pairs.min_angle_deg));
   EXPECT_EQ(FindRefineOption("max_pairs")->type(), OptionType::kInt);
   EXPECT_EQ(FindRefineOption("hold_unseen")->type(), OptionType::kBool);
   EXPECT_EQ(FindRefineOption("pairs.min_angle_deg"), nullptr);
@@ -90,7 +93,7 @@ TEST(RefineOptions, EveryOutOfRangeValueIsNamedByItsWireNameWithTheRange) {
       EXPECT_EQ(message.rfind(std::string(option.name) + " must be ", 0), 0u) << message;
       EXPECT_NE(message.find(option.RangeText()), std::string::npos) << message;
       ExpectOnlyWireNames(message);
-      if (option.is_pair_option()) {
+      if (option.is_nested()) {
         EXPECT_EQ(o.pairs.Check(), message);
       }
     }
@@ -104,7 +107,9 @@ TEST(RefineOptions, CrossFieldChecksUseWireNames) {
   ExpectOnlyWireNames(o.Check());
   o = RefineOptions();
   o.pairs.optimal_angle_deg = 70;
-  EXPECT_EQ(o.Check(), "optimal_pair_angle_deg must be in [min_pair_angle_deg, max_pair_angle_deg] = [2, 60], got 70");
+  EXPECT_EQ(o.Check(),
+            "optimal_pair_angle_deg must be in [min_pair_angle_deg, max_pair_angle_deg] = [2, 60], "
+            "got 70");
   ExpectOnlyWireNames(o.Check());
   EXPECT_EQ(o.pairs.Check(), o.Check());
 }

@@ -207,15 +207,30 @@ TEST(JobSpecFromJson, OutOfRangeOptionsAreNamedWithTheirRange) {
   EXPECT_EQ(ErrorOf(job), "options.pairs.min_angle_deg: unknown option");
 }
 
-TEST(JobSchema, OptionsAreTheTable) {
+// The schema file's `section` properties are the table's (proto::*OptionsSchema()).
+void ExpectSchemaSectionIs(const std::string& section, const json& expected) {
   std::ifstream in(std::string(SATMESH_PROTO_DIR) + "/job.schema.json");
-  const json options = json::parse(in)["properties"]["options"]["properties"];
-  const json expected = proto::RefineOptionsSchema();
+  const json properties = json::parse(in)["properties"][section]["properties"];
   for (const auto& [name, schema] : expected.items())
-    EXPECT_EQ(options.value(name, json()), schema)
-        << "job.schema.json options." << name << " should read\n\"" << name << "\": " << schema.dump();
-  for (const auto& [name, schema] : options.items())
-    EXPECT_TRUE(expected.contains(name)) << "job.schema.json options." << name << " is not in RefineOptionTable()";
+    EXPECT_EQ(properties.value(name, json()), schema)
+        << "job.schema.json " << section << "." << name << " should read\n\"" << name << "\": " << schema.dump();
+  for (const auto& [name, schema] : properties.items())
+    EXPECT_TRUE(expected.contains(name)) << "job.schema.json " << section << "." << name << " is not in the table";
+}
+
+TEST(JobSchema, OptionsAndTilingAreTheTables) {
+  ExpectSchemaSectionIs("options", proto::RefineOptionsSchema());
+  ExpectSchemaSectionIs("tiling", proto::TilingOptionsSchema());
+}
+
+TEST(JobSpecFromJson, OutOfRangeTilingIsNamedWithItsRange) {
+  for (const TilingOptionInfo& option : TilingOptionTable()) {
+    json job = MinimalJob();
+    job["tiling"][std::string(option.name)] = -1;
+    const std::string error = ErrorOf(job);
+    EXPECT_EQ(error.find("tiling." + std::string(option.name) + " must be "), 0u) << error;
+    EXPECT_NE(error.find(option.RangeText() + ", got -1"), std::string::npos) << error;
+  }
 }
 
 TEST(ApplyOptionOverride, RefinementOptionsAreTheTables) {
@@ -224,6 +239,7 @@ TEST(ApplyOptionOverride, RefinementOptionsAreTheTables) {
   proto::ApplyOptionOverride(&job, "hold_unseen=false");
   EXPECT_EQ(job["options"]["min_pair_angle_deg"], 3);
   EXPECT_EQ(job["options"]["hold_unseen"], false);
+  EXPECT_THROW(proto::ApplyOptionOverride(&job, "tiling.size=3"), Error);
   try {
     proto::ApplyOptionOverride(&job, "min_angle_deg=3");
     ADD_FAILURE() << "an unknown option was set";
