@@ -72,7 +72,10 @@ struct OptionInfo {
   OptionValue Get(const Options& options) const {
     return std::visit([&](auto member) { return OptionValue(Ref(options, member)); }, field);
   }
-  OptionValue Default() const { return Get(Options()); }
+  OptionValue Default() const {
+    static const Options defaults{};  // the fields' initializers
+    return Get(defaults);
+  }
   // v must be of type() (an int is taken for a double option).
   void Set(Options* options, OptionValue v) const {
     std::visit(
