@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <string>
+
+#include <unistd.h>
 
 #include "core/common/error.h"
 #include "core/geo/crs.h"
@@ -21,7 +24,9 @@ std::string WriteTestDsm(const std::string& name, const std::string& crs = "EPSG
   dsm.z.resize(size_t(dsm.width) * dsm.height);
   for (int j = 0; j < dsm.height; ++j)
     for (int i = 0; i < dsm.width; ++i) dsm.at(i, j) = float(i);
-  const auto path = std::filesystem::temp_directory_path() / ("tiling_plan_" + name + ".tif");
+  // The process id in the name: another test run on the machine removes its own at exit.
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("tiling_plan_" + std::to_string(getpid()) + "_" + name + ".tif");
   WriteDsm(path.string(), dsm);
   testing::RemoveAtExit(path);
   return path.string();
