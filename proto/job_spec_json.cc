@@ -76,6 +76,7 @@ void ParseOptions(const json& o, RefineOptions* r) {
     else if (key == "rasterize_hit_maps") r->rasterize_hit_maps = Boolean(v, path);
     else if (key == "hit_maps_every") r->hit_maps_every = Integer(v, path);
     else if (key == "coarse_edge_px") r->coarse_edge_px = Number(v, path);
+    else if (key == "flat_tolerance_gsd") r->flat_tolerance_gsd = Number(v, path);
     else if (key == "remesh_coarse") r->remesh_coarse = Boolean(v, path);
     else if (key == "alternate_directions") r->alternate_directions = Boolean(v, path);
     else if (key == "restart_from_initial") r->restart_from_initial = Boolean(v, path);

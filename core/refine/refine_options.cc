@@ -56,6 +56,8 @@ std::string RefineOptions::Check() const {
     return "height_sigma_gsd must be >= 0, got " + Num(height_sigma_gsd);
   if (!(min_height_confidence > 0 && min_height_confidence <= 1))
     return "min_height_confidence must be in (0, 1], got " + Num(min_height_confidence);
+  if (!(flat_tolerance_gsd >= 0))
+    return "flat_tolerance_gsd must be >= 0, got " + Num(flat_tolerance_gsd);
   if (!(coarse_edge_px > 0)) return "coarse_edge_px must be > 0, got " + Num(coarse_edge_px);
   return pairs.Check();
 }
