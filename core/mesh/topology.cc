@@ -135,6 +135,71 @@ TriangleMesh Subdivide1To4(const TriangleMesh& mesh) {
   return out;
 }
 
+TriangleMesh SubdivideMarked(const TriangleMesh& mesh, const std::vector<char>& marked) {
+  const size_t num_faces = mesh.faces.size();
+  // Corner k of face f stands for its edge k -> k+1; edge_of[3f+k] numbers unique edges.
+  std::vector<std::pair<uint64_t, uint32_t>> corner_edges(3 * num_faces);
+  for (size_t f = 0; f < num_faces; ++f)
+    for (int k = 0; k < 3; ++k)
+      corner_edges[3 * f + k] = {EdgeKey(mesh.faces[f][k], mesh.faces[f][(k + 1) % 3]),
+                                 uint32_t(3 * f + k)};
+  std::sort(corner_edges.begin(), corner_edges.end());
+  std::vector<int> edge_of(3 * num_faces);
+  std::vector<uint64_t> edge_key;
+  for (size_t i = 0; i < corner_edges.size(); ++i) {
+    if (i == 0 || corner_edges[i].first != corner_edges[i - 1].first)
+      edge_key.push_back(corner_edges[i].first);
+    edge_of[corner_edges[i].second] = int(edge_key.size()) - 1;
+  }
+  std::vector<char> split(edge_key.size(), 0);
+  for (size_t f = 0; f < num_faces; ++f)
+    if (marked[f])
+      for (int k = 0; k < 3; ++k) split[edge_of[3 * f + k]] = 1;
+  // Closure: two split edges make three. Each pass only adds splits, so it ends.
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (size_t f = 0; f < num_faces; ++f) {
+      const int* e = &edge_of[3 * f];
+      if (split[e[0]] + split[e[1]] + split[e[2]] == 2) {
+        split[e[0]] = split[e[1]] = split[e[2]] = 1;
+        changed = true;
+      }
+    }
+  }
+  TriangleMesh out;
+  out.origin = mesh.origin;
+  out.crs = mesh.crs;
+  out.vertices = mesh.vertices;
+  std::vector<int> midpoint(edge_key.size(), -1);
+  for (size_t e = 0; e < edge_key.size(); ++e) {
+    if (!split[e]) continue;
+    const int a = int(edge_key[e] >> 32), b = int(edge_key[e] & 0xffffffffu);
+    midpoint[e] = int(out.vertices.size());
+    out.vertices.push_back(0.5f * (mesh.vertices[a] + mesh.vertices[b]));
+  }
+  out.faces.reserve(num_faces * 2);
+  for (size_t f = 0; f < num_faces; ++f) {
+    const Eigen::Vector3i& v = mesh.faces[f];
+    const int m[3] = {midpoint[edge_of[3 * f]], midpoint[edge_of[3 * f + 1]],
+                      midpoint[edge_of[3 * f + 2]]};
+    const int count = (m[0] >= 0) + (m[1] >= 0) + (m[2] >= 0);
+    if (count == 0) {
+      out.faces.push_back(v);
+    } else if (count == 3) {
+      out.faces.push_back({v[0], m[0], m[2]});
+      out.faces.push_back({m[0], v[1], m[1]});
+      out.faces.push_back({m[2], m[1], v[2]});
+      out.faces.push_back({m[0], m[1], m[2]});
+    } else {  // one split edge k (v[k] -> v[k+1]): bisect from the opposite corner
+      const int k = m[0] >= 0 ? 0 : m[1] >= 0 ? 1 : 2;
+      const int a = v[k], b = v[(k + 1) % 3], c = v[(k + 2) % 3];
+      out.faces.push_back({a, m[k], c});
+      out.faces.push_back({m[k], b, c});
+    }
+  }
+  return out;
+}
+
 std::vector<Eigen::Vector2i> UniqueEdges(const TriangleMesh& mesh) {
   std::vector<uint64_t> keys;
   keys.reserve(3 * mesh.faces.size());

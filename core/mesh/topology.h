@@ -30,6 +30,14 @@ std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh);
 // 4f..4f+3 (three corner triangles, then the centre one), orientation preserved.
 TriangleMesh Subdivide1To4(const TriangleMesh& mesh);
 
+// 1 -> 4 subdivision of the faces with marked[f] != 0 only, kept conforming (no vertex
+// in the middle of another face's edge): an edge is split when a marked face has it; a
+// face with two split edges has its third split too (repeated until none is left), so
+// every face ends with 0 split edges (kept), 1 (bisected from the opposite corner into
+// two) or 3 (1 -> 4 as Subdivide1To4). Orientation preserved; original vertices keep
+// their indices, midpoints follow. marked.size() must be mesh.num_faces().
+TriangleMesh SubdivideMarked(const TriangleMesh& mesh, const std::vector<char>& marked);
+
 // Mean length of the unique (undirected) edges; 0 for a mesh without faces.
 double MeanEdgeLength(const TriangleMesh& mesh);
 

@@ -17,6 +17,7 @@
 #include "core/refine/coarse_mesh.h"
 #include "core/refine/height_confidence.h"
 #include "core/refine/hit_map_raster.h"
+#include "core/refine/mesh_resolution.h"
 #include "core/refine/pairs.h"
 #include "core/refine/photometric_gradient.h"
 #include "core/refine/thin_plate.h"
@@ -358,7 +359,14 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
     double initial_zncc = std::numeric_limits<double>::quiet_NaN(), check_s = 0;
     TriangleMesh initial;
     if (level < options.levels) {
-      mesh = Subdivide1To4(mesh);
+      const std::vector<char> subdivide =
+          FacesToSubdivide(mesh, options.flat_tolerance_gsd * result->gsd_m * std::ldexp(1.0, level + 1));
+      const size_t faces_before = mesh.num_faces();
+      mesh = SubdivideMarked(mesh, subdivide);
+      if (options.flat_tolerance_gsd > 0)
+        spdlog::info("level {}: {} of {} faces subdivided ({} -> {} faces)", level,
+                     std::count(subdivide.begin(), subdivide.end(), 1), faces_before,
+                     faces_before, mesh.num_faces());
       SortSpatially(&mesh);
       if (check_initial) {
         const auto t0 = Clock::now();

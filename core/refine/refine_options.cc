@@ -62,6 +62,9 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "each pixel keeps its face and its hit point follows the moving face"},
       {"coarse_edge_px", &R::coarse_edge_px, Range::Above(0),
        "edge length of the coarse mesh at the coarsest level, in level pixels"},
+      {"flat_tolerance_gsd", &R::flat_tolerance_gsd, Range::AtLeast(0),
+       "between levels only faces near a vertex off the plane of its neighbours by more than "
+       "this many level GSDs are subdivided; planar parts keep larger triangles; 0: all faces"},
       {"remesh_coarse", &R::remesh_coarse, {},
        "isotropic remeshing of the coarse mesh; false: keep the input's triangles"},
       {"restart_from_initial", &R::restart_from_initial, {},

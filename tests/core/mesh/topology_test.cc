@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
 #include <set>
 
 #include "tests/core/mesh/mesh_fixtures.h"
@@ -123,6 +124,70 @@ TEST(Subdivide1To4, ClosedCubeStaysClosed) {
   EXPECT_EQ(long(fine.num_vertices()) - long(UniqueEdges(fine).size()) + long(fine.num_faces()), 2);
   const VertexAdjacency adj = BuildVertexAdjacency(fine);
   EXPECT_TRUE(std::none_of(adj.is_boundary.begin(), adj.is_boundary.end(), [](bool b) { return b; }));
+}
+
+// Every edge of a closed mesh is used by exactly two faces (no T-junction, no hole).
+void ExpectEveryEdgeUsedTwice(const TriangleMesh& mesh) {
+  std::map<std::pair<int, int>, int> uses;
+  for (const auto& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) ++uses[std::minmax(f[k], f[(k + 1) % 3])];
+  for (const auto& [edge, n] : uses) EXPECT_EQ(n, 2) << edge.first << "-" << edge.second;
+}
+
+TEST(SubdivideMarked, AllOrNoneMarkedIsSubdivide1To4OrACopy) {
+  const TriangleMesh mesh = testing::CreateGridMesh(4, 2.f, /*wavy=*/true);
+  const TriangleMesh all = SubdivideMarked(mesh, std::vector<char>(mesh.num_faces(), 1));
+  const TriangleMesh fine = Subdivide1To4(mesh);
+  EXPECT_EQ(all.vertices, fine.vertices);
+  EXPECT_EQ(all.faces, fine.faces);
+  const TriangleMesh none = SubdivideMarked(mesh, std::vector<char>(mesh.num_faces(), 0));
+  EXPECT_EQ(none.vertices, mesh.vertices);
+  EXPECT_EQ(none.faces, mesh.faces);
+}
+
+TEST(SubdivideMarked, OneMarkedFaceOfAClosedCubeStaysClosedAndConforming) {
+  const TriangleMesh cube = Subdivide1To4(testing::CreateCube());
+  std::vector<char> marked(cube.num_faces(), 0);
+  marked[5] = 1;
+  const TriangleMesh out = SubdivideMarked(cube, marked);
+  // The marked face -> 4, its 3 neighbours bisected -> 2 each: +3 vertices, +3 + 3 faces.
+  EXPECT_EQ(out.num_vertices(), cube.num_vertices() + 3);
+  EXPECT_EQ(out.num_faces(), cube.num_faces() + 6);
+  ExpectEveryEdgeUsedTwice(out);
+  EXPECT_EQ(long(out.num_vertices()) - long(UniqueEdges(out).size()) + long(out.num_faces()), 2);
+  // Orientation kept: every new face points the way of the face it came from (outward).
+  const auto normals = FaceNormals(out);
+  for (size_t f = 0; f < out.num_faces(); ++f) {
+    Eigen::Vector3f centre = Eigen::Vector3f::Zero();
+    for (int k = 0; k < 3; ++k) centre += out.vertices[out.faces[f][k]] / 3.f;
+    EXPECT_GT(normals[f].dot(centre - Eigen::Vector3f(0.5f, 0.5f, 0.5f)), 0.f) << "face " << f;
+  }
+}
+
+TEST(SubdivideMarked, TwoSplitEdgesBecomeThreeAndTheAreaIsKept) {
+  // Two marked faces sharing a corner of a third: the closure splits the third wholly
+  // when it has two split edges; on a flat grid the area is kept exactly.
+  const TriangleMesh mesh = testing::CreateGridMesh(6, 1.f);
+  std::vector<char> marked(mesh.num_faces(), 0);
+  for (size_t f = 0; f < mesh.num_faces(); f += 7) marked[f] = 1;
+  const TriangleMesh out = SubdivideMarked(mesh, marked);
+  double area = 0, out_area = 0;
+  for (float a : FaceAreas(mesh)) area += a;
+  for (float a : FaceAreas(out)) out_area += a;
+  EXPECT_NEAR(out_area, area, 1e-5 * area);
+  // Conforming: only the grid's border is open (no vertex on another face's edge).
+  std::map<std::pair<int, int>, int> uses;
+  for (const auto& f : out.faces)
+    for (int k = 0; k < 3; ++k) ++uses[std::minmax(f[k], f[(k + 1) % 3])];
+  for (const auto& [edge, n] : uses) {
+    const Eigen::Vector3f a = out.vertices[edge.first], b = out.vertices[edge.second];
+    const bool on_border = (a.x() == 0 && b.x() == 0) || (a.y() == 0 && b.y() == 0) ||
+                           (a.x() == 6 && b.x() == 6) || (a.y() == 6 && b.y() == 6);
+    EXPECT_EQ(n, on_border ? 1 : 2) << a.transpose() << " - " << b.transpose();
+  }
+  // Every face has 0, 1 or 3 split edges: between 1x and 4x the faces.
+  EXPECT_GT(out.num_faces(), mesh.num_faces());
+  EXPECT_LT(out.num_faces(), 4 * mesh.num_faces());
 }
 
 TEST(MeanEdgeLength, UnitGridCountsEachEdgeOnce) {
