@@ -234,6 +234,11 @@ TileResult TileResultFromJson(const JobPlan& plan, const json& j) {
   t.ok = j.at("status") == "successful";
   if (!t.ok) {
     t.error = j.at("error").value("message", "");
+    const std::string code = j.at("error").value("code", "internal");
+    t.error_code = ErrorCode::kInternal;
+    for (ErrorCode c : {ErrorCode::kInvalidArgument, ErrorCode::kInvalidInput, ErrorCode::kNotFound,
+                        ErrorCode::kIo, ErrorCode::kNoSpace, ErrorCode::kNotConverged, ErrorCode::kCancelled})
+      if (code == ErrorCodeName(c)) t.error_code = c;
     return t;
   }
   t.region = j.at("region").get<std::array<double, 6>>();

@@ -48,6 +48,19 @@ double UnixSeconds() {
 
 }  // namespace
 
+bool TileRecordFailed(const json& record, std::string* code, std::string* message) {
+  if (!record.is_object() || record.value("status", "") != "failed") return false;
+  const json error = record.value("error", json::object());
+  *code = error.is_object() ? error.value("code", "internal") : "internal";
+  *message = error.is_object() ? error.value("message", "") : "";
+  return true;
+}
+
+json FailedTileRecord(const TileKey& tile, const std::string& code, const std::string& message) {
+  return {{"name", tile.Name()}, {"x", tile.x}, {"y", tile.y}, {"status", "failed"},
+          {"error", {{"code", code}, {"message", message}}}};
+}
+
 void WriteFileAtomic(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".tmp";
   {
@@ -103,7 +116,6 @@ json RealExecutor::RunTile(const JobSpec& spec, const TileKey& key, const std::s
   SATMESH_CHECK(index >= 0, ErrorCode::kInternal, "tile " + key.Name() + " is not in the job's plan");
   const double started = UnixSeconds();
   const TileResult result = satmesh::RunTile(spec, plan, index, job_dir, progress);
-  if (!result.ok) ThrowError(result.error_code, result.error);
   json record = proto::TileResultToJson(plan, result);
   record["started_unix_s"] = started;  // the job's wall time at assembly: first start -> end
   return record;
@@ -111,18 +123,16 @@ json RealExecutor::RunTile(const JobSpec& spec, const TileKey& key, const std::s
 
 json RealExecutor::Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
                             const std::vector<json>& tile_results, const std::string& job_dir) {
-  JobOutputs outputs;
-  outputs.plan = PlanJob(spec);
+  const JobPlan plan = PlanJob(spec);
+  std::vector<TileResult> results(plan.tiles.size());
   double first_start = UnixSeconds();
   for (const json& r : tile_results) {
-    outputs.tiles.push_back(proto::TileResultFromJson(outputs.plan, r));
+    TileResult tile = proto::TileResultFromJson(plan, r);
+    const int index = tile.index;
+    results.at(size_t(index)) = std::move(tile);
     first_start = std::min(first_start, r.value("started_unix_s", first_start));
   }
-  outputs.assembly = AssembleOutputs(outputs.plan, outputs.tiles, job_dir);
-  outputs.mesh_path = outputs.assembly.mesh_path;
-  outputs.dsm_path = outputs.assembly.dsm_path;
-  for (const auto& t : outputs.tiles) outputs.prepare_s += t.prepare_s, outputs.write_s += t.write_s;
-  outputs.write_s += outputs.assembly.assemble_s;
+  JobOutputs outputs = AssembleJob(plan, std::move(results), job_dir);
   // Tiles ran on the server's workers, possibly across restarts: the job's time is from
   // its first tile's start to now (queueing behind other jobs included).
   outputs.total_s = UnixSeconds() - first_start;

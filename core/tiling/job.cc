@@ -100,6 +100,26 @@ std::string JobSpec::Check() const {
   return "";
 }
 
+JobOutputs AssembleJob(const JobPlan& plan, std::vector<TileResult> tiles, const std::string& out_dir) {
+  SATMESH_CHECK(tiles.size() == plan.tiles.size(), ErrorCode::kInternal,
+                "assembly: " + std::to_string(tiles.size()) + " tile results for " +
+                    std::to_string(plan.tiles.size()) + " planned tiles");
+  const auto failed = [](const TileResult& t) { return !t.ok; };
+  if (std::all_of(tiles.begin(), tiles.end(), failed))
+    ThrowError(tiles[0].error_code, tiles.size() == 1 ? tiles[0].error
+                                                      : "every tile failed; first: " + tiles[0].name +
+                                                            ": " + tiles[0].error);
+  JobOutputs out;
+  out.plan = plan;
+  out.tiles = std::move(tiles);
+  out.assembly = AssembleOutputs(out.plan, out.tiles, out_dir);
+  out.mesh_path = out.assembly.mesh_path;
+  out.dsm_path = out.assembly.dsm_path;
+  for (const auto& t : out.tiles) out.prepare_s += t.prepare_s, out.write_s += t.write_s;
+  out.write_s += out.assembly.assemble_s;
+  return out;
+}
+
 JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progress& progress) {
   const auto t_start = Clock::now();
   JobOutputs out;
@@ -170,16 +190,13 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
     }
   if (cancelled || progress.Cancelled()) ThrowError(ErrorCode::kCancelled, "cancelled by the caller");
 
-  const auto failed = [](const TileResult& t) { return !t.ok; };
-  if (std::all_of(out.tiles.begin(), out.tiles.end(), failed))
-    ThrowError(out.tiles[0].error_code, single ? out.tiles[0].error
-                                               : "every tile failed; first: " + out.tiles[0].name +
-                                                     ": " + out.tiles[0].error);
-  out.assembly = AssembleOutputs(out.plan, out.tiles, out_dir);
-  out.mesh_path = out.assembly.mesh_path;
-  out.dsm_path = out.assembly.dsm_path;
-  for (const auto& t : out.tiles) out.prepare_s += t.prepare_s, out.write_s += t.write_s;
-  out.write_s += out.assembly.assemble_s;
+  JobOutputs assembled = AssembleJob(out.plan, std::move(out.tiles), out_dir);
+  out.tiles = std::move(assembled.tiles);
+  out.assembly = std::move(assembled.assembly);
+  out.mesh_path = assembled.mesh_path;
+  out.dsm_path = assembled.dsm_path;
+  out.prepare_s = assembled.prepare_s;
+  out.write_s = assembled.write_s;
   if (single && out.tiles[0].ok) {
     out.refine = out.tiles[0].refine;
     out.view_names = out.tiles[0].view_names;
