@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <random>
 #include <set>
 #include <string>
 #include <thread>
@@ -99,8 +100,8 @@ class RedisQueue : public ::testing::Test {
   void SetUp() override {
     if (!fs::exists(kRedisServer)) GTEST_SKIP() << "redis-server is not installed (Debian: apt-get install redis-server)";
     dir_ = TempDir(::testing::UnitTest::GetInstance()->current_test_info()->name());
-    apis_.reserve(8);  // StartApi/StartWorker hand out references into these
-    workers_.reserve(8);
+    apis_.reserve(8);  // StartApi/StartWorker hand out references into these: at most
+    workers_.reserve(64);  // 8 API nodes and 64 workers per test
     data_ = dir_ + "/data";
     fs::create_directories(dir_ + "/redis");
     redis_port_ = FreePort();
@@ -138,10 +139,10 @@ class RedisQueue : public ::testing::Test {
   }
 
   // The scene: 36 m AOI, 2 x 2 tiles of 18 m, one coarse level (as tests/core/tiling).
-  json MakeJob(int iterations) {
+  json MakeJob(int iterations, double aoi_size_m = 36) {
     scene_ = dir_ + "/scene";
     synth::SynthOptions o = synth::SynthPreset("small", /*seed=*/3);
-    o.city.aoi_size_m = 36;
+    o.city.aoi_size_m = aoi_size_m;
     o.city.ground_margin_m = 45;
     o.city.building_margin_m = 5;
     o.city.street_pitch_m = 40;
@@ -357,6 +358,52 @@ TEST_F(RedisQueue, RedisRestartedMidJobLosesNothing) {
   const json listed = Json(Client(api).Get(("/jobs/" + id + "/tiles").c_str()));
   const json metrics = Json(Client(api).Get(("/jobs/" + id + "/results").c_str()))["metrics"]["value"];
   ExpectEveryTileOnce(listed["tiles"], metrics, 4);
+}
+
+// Chaos: a 16-tile job, two API nodes, three workers; 20 times a random worker is killed
+// (SIGKILL) at a random moment and a new one started, and the API node the job was
+// submitted to is killed too. Every tile is done, each result once, nothing left pending.
+TEST_F(RedisQueue, ChaosKillsOfWorkersAndAnApiNodeLoseNoTile) {
+  const json job = MakeJob(/*iterations=*/3, /*aoi_size_m=*/72);  // 4 x 4 tiles of 18 m
+  const Process& first_api = StartApi();
+  Process& api0 = apis_.back();
+  const Process& api = StartApi();
+  std::vector<size_t> alive;
+  for (int i = 0; i < 3; ++i) {
+    StartWorker(/*idle_timeout_s=*/1, /*max_deliveries=*/30);
+    alive.push_back(workers_.size() - 1);
+  }
+  const auto t0 = Clock::now();
+  const std::string id = Submit(first_api, job);
+  ASSERT_FALSE(id.empty());
+  RedisConnection redis(ParseRedisUrl(url_));
+  std::mt19937 random(22);
+  int kills = 0;
+  while (kills < 20 && redis.Command({"HGET", "satmesh:job:" + id, "status"}).str != "successful") {
+    std::this_thread::sleep_for(std::chrono::milliseconds(std::uniform_int_distribution<int>(100, 700)(random)));
+    const size_t pick = std::uniform_int_distribution<size_t>(0, alive.size() - 1)(random);
+    workers_[alive[pick]].Kill(SIGKILL);
+    ++kills;
+    if (kills == 5) api0.Kill(SIGKILL);
+    StartWorker(/*idle_timeout_s=*/1, /*max_deliveries=*/30);
+    alive[pick] = workers_.size() - 1;
+  }
+  const json info = WaitEnd(api, id);
+  const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  ASSERT_EQ(info["status"], "successful") << info.dump();
+  const json listed = Json(Client(api).Get(("/jobs/" + id + "/tiles").c_str()));
+  const json metrics = Json(Client(api).Get(("/jobs/" + id + "/results").c_str()))["metrics"]["value"];
+  ExpectEveryTileOnce(listed["tiles"], metrics, 16);
+  EXPECT_EQ(redis.Command({"HLEN", "satmesh:job:" + id + ":results"}).integer, 16);
+  for (int i = 0; i < 100 && redis.Command({"XPENDING", "satmesh:tiles", "workers"}).elements.at(0).integer > 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_EQ(redis.Command({"XPENDING", "satmesh:tiles", "workers"}).elements.at(0).integer, 0);
+  int deliveries = 0;
+  double tile_s = 0;
+  for (const auto& t : listed["tiles"]) deliveries += t["attempts"].get<int>(), tile_s += t["duration_s"].get<double>();
+  std::printf("[ redis ] chaos: %d worker kills + 1 API node kill; 16 tiles in %.1f s, %d deliveries "
+              "(%d again), %.1f s of tile time in the results\n", kills, wall_s, deliveries, deliveries - 16, tile_s);
+  EXPECT_GE(kills, 10) << "the job ended before the chaos did much";
 }
 
 TEST(RedisUrl, ParsesHostPortAndDbAndRefusesOthers) {
