@@ -271,7 +271,8 @@ struct ApiServer::Impl {
     http.Get("/api", [this](const auto& req, auto& res) { SendJson(req, res, openapi); });
     http.Get("/health", [this](const auto& req, auto& res) {
       const auto s = scheduler.Stats();
-      SendJson(req, res, {{"status", "ok"}, {"workers", options.scheduler.workers},
+      // Queue mode: the workers seen in the last minute (any machine); else this process's.
+      SendJson(req, res, {{"status", "ok"}, {"workers", s.workers_seen >= 0 ? s.workers_seen : options.scheduler.workers},
                      {"tiles_queued", s.tiles_queued}, {"tiles_running", s.tiles_running}});
     });
     http.Get("/metrics", [this](const auto& req, auto& res) {

@@ -232,6 +232,7 @@ TEST_F(RedisQueue, MultiTileJobMatchesTheSingleProcessRun) {
   const std::string metrics_text = c.Get("/metrics")->body;
   EXPECT_NE(metrics_text.find("satmesh_workers_seen 2"), std::string::npos) << metrics_text;
   EXPECT_NE(metrics_text.find("satmesh_tiles_done_total 4"), std::string::npos) << metrics_text;
+  EXPECT_EQ(Json(c.Get("/health"))["workers"], 2);
 
   const auto t1 = Clock::now();
   const JobOutputs local = RunJob(proto::JobSpecFromJson(job, scene_), dir_ + "/local");
@@ -406,6 +407,41 @@ TEST_F(RedisQueue, ChaosKillsOfWorkersAndAnApiNodeLoseNoTile) {
   EXPECT_GE(kills, 10) << "the job ended before the chaos did much";
 }
 
+// Throughput (not run by ctest: a measurement; run it alone, under
+// flock /tmp/satmesh-bench.lock): the 16-tile job with 1, 2 and 3 workers, tiles per
+// minute, and Redis's load per tile (commands, bytes in and out) for the model of N machines.
+TEST_F(RedisQueue, DISABLED_ThroughputWithOneTwoThreeWorkers) {
+  const json job = MakeJob(/*iterations=*/3, /*aoi_size_m=*/72);
+  const Process& api = StartApi();
+  RedisConnection redis(ParseRedisUrl(url_));
+  const auto stat = [&](const std::string& key) {
+    const std::string info = redis.Command({"INFO", "stats"}).str;
+    const size_t at = info.find(key + ":");
+    return at == std::string::npos ? 0.0 : std::atof(info.c_str() + at + key.size() + 1);
+  };
+  for (int n = 1; n <= 3; ++n) {
+    while (!workers_.empty()) {
+      workers_.back().Kill(SIGTERM);
+      workers_.pop_back();
+    }
+    for (int i = 0; i < n; ++i) StartWorker();
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    const double commands0 = stat("total_commands_processed"), in0 = stat("total_net_input_bytes"),
+                 out0 = stat("total_net_output_bytes");
+    const auto t0 = Clock::now();
+    const std::string id = Submit(api, job);
+    const json info = WaitEnd(api, id);
+    const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
+    ASSERT_EQ(info["status"], "successful") << info.dump();
+    // Less the polling of this test and the idle workers' reads (about 1/s each).
+    const double commands = stat("total_commands_processed") - commands0, in = stat("total_net_input_bytes") - in0,
+                 out = stat("total_net_output_bytes") - out0;
+    std::printf("[ redis ] %d worker(s): 16 tiles in %.1f s = %.1f tiles/min; Redis per tile (with this test's "
+                "polling): %.0f commands, %.1f kB in, %.1f kB out\n",
+                n, wall_s, 16 * 60 / wall_s, commands / 16, in / 16 / 1024, out / 16 / 1024);
+  }
+}
+
 TEST(RedisUrl, ParsesHostPortAndDbAndRefusesOthers) {
   const RedisAddress a = ParseRedisUrl("redis://10.0.0.5:6380/2");
   EXPECT_EQ(a.host, "10.0.0.5");
@@ -436,7 +472,10 @@ TEST(RedisQueueOptions, DefaultsAreValidAndBadValuesNamed) {
   EXPECT_EQ(w.Check(), "");
   // satmesh-server --queue: a bad URL is refused naming it.
   EXPECT_THROW(ParseServerArgs({"--queue", "redis://"}), Error);
-  EXPECT_EQ(ParseServerArgs({"--queue", "redis://r:1/3"}).queue, "redis://r:1/3");
+  const ServerOptions parsed = ParseServerArgs({"--queue", "redis://r:1/3", "--queue-prefix", "city"});
+  EXPECT_EQ(parsed.queue, "redis://r:1/3");
+  EXPECT_EQ(parsed.redis.prefix, "city");
+  EXPECT_THROW(ParseServerArgs({"--queue", "redis://r:1", "--queue-prefix", ""}), Error);
 }
 
 TEST_F(RedisQueue, CancellingThroughAnotherApiNodeStopsTheTiles) {
