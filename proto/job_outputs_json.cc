@@ -347,6 +347,18 @@ json JobMetricsToJson(const JobOutputs& o) {
   return metrics;
 }
 
+json JobBiasesToJson(const JobBiases& b) {
+  return {{"bias_px", BiasesToJson(b.bias_px)}, {"tile", b.tile}, {"seconds", b.seconds}};
+}
+
+JobBiases JobBiasesFromJson(const json& j) {
+  JobBiases b;
+  for (const auto& v : j.value("bias_px", json::array())) b.bias_px.emplace_back(v.at(0).get<double>(), v.at(1).get<double>());
+  b.tile = j.value("tile", "");
+  b.seconds = j.value("seconds", 0.0);
+  return b;
+}
+
 json RefineMetricsToJson(const JobOutputs& outputs) { return JobMetricsToJson(outputs); }
 
 void WriteJobJson(const JobOutputs& outputs, const std::string& out_dir) {

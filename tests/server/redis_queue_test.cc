@@ -139,7 +139,7 @@ class RedisQueue : public ::testing::Test {
   }
 
   // The scene: 36 m AOI, 2 x 2 tiles of 18 m, one coarse level (as tests/core/tiling).
-  json MakeJob(int iterations, double aoi_size_m = 36) {
+  json MakeJob(int iterations, double aoi_size_m = 36, bool estimate_bias = false) {
     scene_ = dir_ + "/scene";
     synth::SynthOptions o = synth::SynthPreset("small", /*seed=*/3);
     o.city.aoi_size_m = aoi_size_m;
@@ -152,7 +152,7 @@ class RedisQueue : public ::testing::Test {
     json job = ReadJsonFile(scene_ + "/job.json");
     job["options"]["levels"] = 1;
     job["options"]["iterations_per_level"] = iterations;
-    job["options"]["estimate_bias"] = false;
+    job["options"]["estimate_bias"] = estimate_bias;
     job["tiling"] = {{"size_m", 18}, {"overlap_m", 3}};
     return job;
   }
@@ -213,7 +213,8 @@ void ExpectEveryTileOnce(const json& tiles, const json& metrics, size_t n) {
 }
 
 TEST_F(RedisQueue, MultiTileJobMatchesTheSingleProcessRun) {
-  const json job = MakeJob(/*iterations=*/3);
+  // With the job's biases estimated once (by the first worker), as in-process.
+  const json job = MakeJob(/*iterations=*/3, /*aoi_size_m=*/36, /*estimate_bias=*/true);
   const Process& api = StartApi();
   StartWorker();
   StartWorker();
@@ -245,8 +246,14 @@ TEST_F(RedisQueue, MultiTileJobMatchesTheSingleProcessRun) {
     EXPECT_EQ(a["name"], b["name"]);
     EXPECT_EQ(a["faces"], b["faces"]);
     EXPECT_EQ(a["vertices"], b["vertices"]);
-    EXPECT_EQ(a["region"], b["region"]);
+    for (int k = 0; k < 6; ++k)  // radians, then metres (summation order: see below)
+      EXPECT_NEAR(a["region"][k].get<double>(), b["region"][k].get<double>(), k < 4 ? 1e-9 : 1e-3) << a["name"];
+    ASSERT_EQ(a.value("bias_px", json()).size(), b.value("bias_px", json()).size()) << a["name"];
+    for (size_t v = 0; v < b.value("bias_px", json()).size(); ++v)
+      for (int k = 0; k < 2; ++k)
+        EXPECT_NEAR(a["bias_px"][v][k].get<double>(), b["bias_px"][v][k].get<double>(), 1e-3);
   }
+  EXPECT_FALSE(local.job_bias_px.empty());
   EXPECT_EQ(served["totals"]["faces"], expected["totals"]["faces"]);
   EXPECT_EQ(served["totals"]["vertices"], expected["totals"]["vertices"]);
   EXPECT_EQ(served["seams_total"]["cells"], expected["seams_total"]["cells"]);
