@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -21,7 +22,9 @@ std::string WriteTestDsm(const std::string& name, const std::string& crs = "EPSG
   dsm.z.resize(size_t(dsm.width) * dsm.height);
   for (int j = 0; j < dsm.height; ++j)
     for (int i = 0; i < dsm.width; ++i) dsm.at(i, j) = float(i);
-  const auto path = std::filesystem::temp_directory_path() / ("tiling_plan_" + name + ".tif");
+  // Per process: another checkout's test run on the machine may write the same name.
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("tiling_plan_" + name + "_" + std::to_string(::getpid()) + ".tif");
   WriteDsm(path.string(), dsm);
   testing::RemoveAtExit(path);
   return path.string();
