@@ -234,6 +234,11 @@ TileResult TileResultFromJson(const JobPlan& plan, const json& j) {
   t.ok = j.at("status") == "successful";
   if (!t.ok) {
     t.error = j.at("error").value("message", "");
+    const std::string code = j.at("error").value("code", "internal");
+    t.error_code = ErrorCode::kInternal;
+    for (ErrorCode c : {ErrorCode::kInvalidArgument, ErrorCode::kInvalidInput, ErrorCode::kNotFound,
+                        ErrorCode::kIo, ErrorCode::kNoSpace, ErrorCode::kNotConverged, ErrorCode::kCancelled})
+      if (code == ErrorCodeName(c)) t.error_code = c;
     return t;
   }
   t.region = j.at("region").get<std::array<double, 6>>();
@@ -340,6 +345,18 @@ json JobMetricsToJson(const JobOutputs& o) {
   if (o.tiles.size() == 1 && !o.tiles[0].view_bias_px.empty())
     metrics["bias_px"] = BiasesToJson(o.tiles[0].view_bias_px);
   return metrics;
+}
+
+json JobBiasesToJson(const JobBiases& b) {
+  return {{"bias_px", BiasesToJson(b.bias_px)}, {"tile", b.tile}, {"seconds", b.seconds}};
+}
+
+JobBiases JobBiasesFromJson(const json& j) {
+  JobBiases b;
+  for (const auto& v : j.value("bias_px", json::array())) b.bias_px.emplace_back(v.at(0).get<double>(), v.at(1).get<double>());
+  b.tile = j.value("tile", "");
+  b.seconds = j.value("seconds", 0.0);
+  return b;
 }
 
 json RefineMetricsToJson(const JobOutputs& outputs) { return JobMetricsToJson(outputs); }

@@ -36,6 +36,10 @@ nlohmann::json TileResultToJson(const JobPlan& plan, const TileResult& tile);
 // finished before. Throws Error{kInvalidArgument} for a tile name not in the plan.
 TileResult TileResultFromJson(const JobPlan& plan, const nlohmann::json& tile);
 nlohmann::json TilesetToJson(const Tileset& tileset);
+// The job's biases (job.h, step 1b) and back: {"bias_px": [[col, row], ...] in the job's
+// image order, "tile", "seconds"}; an empty "bias_px" means each tile estimates its own.
+nlohmann::json JobBiasesToJson(const JobBiases& biases);
+JobBiases JobBiasesFromJson(const nlohmann::json& biases);
 nlohmann::json JobMetricsToJson(const JobOutputs& outputs);
 nlohmann::json RefineMetricsToJson(const JobOutputs& outputs);  // = JobMetricsToJson
 // Writes out_dir/tileset.json and out_dir/metrics.json (each atomically).

@@ -17,6 +17,7 @@
 #include "proto/job_spec_json.h"
 #include "server/api_documents.h"
 #include "server/problem.h"
+#include "server/redis_queue.h"
 
 namespace satmesh::server {
 namespace fs = std::filesystem;
@@ -137,6 +138,17 @@ std::string ServerOptions::Check() const {
     if (!ok) return "cors_origins: '" + origin + "' is not '*' or an origin (scheme://host[:port], no path)";
   }
   if (!(memory_budget_mb >= 0)) return "memory_budget_mb: must be >= 0";
+  if (!queue.empty()) {
+    RedisQueueOptions q = redis;
+    q.url = queue;
+    const std::string p = q.Check();
+    if (!p.empty()) return p;
+    try {
+      ParseRedisUrl(queue);
+    } catch (const Error& e) {
+      return e.what();
+    }
+  }
   std::string p = inputs.Check();
   if (!p.empty()) return p;
   return scheduler.Check();
@@ -146,14 +158,22 @@ struct ApiServer::Impl {
   ServerOptions options;
   JobExecutor* executor;
   JobStore store;
-  Scheduler scheduler;
+  std::unique_ptr<JobQueue> queue;  // the embedded Scheduler, or Redis (--queue)
+  JobQueue& scheduler;
   HttpServer http;
   std::thread listener;
   json job_schema, openapi;
   std::string viewer_dir, viewer_page;
 
   Impl(const ServerOptions& o, JobExecutor* e)
-      : options(o), executor(e), store(o.data_dir), scheduler(&store, e, o.scheduler) {}
+      : options(o), executor(e), store(o.data_dir), queue(MakeQueue(o, &store, e)), scheduler(*queue) {}
+
+  static std::unique_ptr<JobQueue> MakeQueue(const ServerOptions& o, JobStore* store, JobExecutor* e) {
+    if (o.queue.empty()) return std::make_unique<Scheduler>(store, e, o.scheduler);
+    RedisQueueOptions q = o.redis;
+    q.url = o.queue;
+    return std::make_unique<RedisJobQueue>(q, o.data_dir);
+  }
 
   JobRecord RequireJob(const std::string& id) const {
     auto job = scheduler.Get(id);
@@ -251,7 +271,8 @@ struct ApiServer::Impl {
     http.Get("/api", [this](const auto& req, auto& res) { SendJson(req, res, openapi); });
     http.Get("/health", [this](const auto& req, auto& res) {
       const auto s = scheduler.Stats();
-      SendJson(req, res, {{"status", "ok"}, {"workers", options.scheduler.workers},
+      // Queue mode: the workers seen in the last minute (any machine); else this process's.
+      SendJson(req, res, {{"status", "ok"}, {"workers", s.workers_seen >= 0 ? s.workers_seen : options.scheduler.workers},
                      {"tiles_queued", s.tiles_queued}, {"tiles_running", s.tiles_running}});
     });
     http.Get("/metrics", [this](const auto& req, auto& res) {
@@ -438,8 +459,12 @@ int ApiServer::Start() {
   }
   impl_->http.RaiseListenBacklog(1024);
   impl_->listener = std::thread([this] { impl_->http.listen_after_bind(); });
-  spdlog::info("satmesh-server listening on http://{}:{} (data: {}, {} worker(s))", o.host, port,
-               o.data_dir, o.scheduler.workers);
+  if (o.queue.empty())
+    spdlog::info("satmesh-server listening on http://{}:{} (data: {}, {} worker(s))", o.host, port,
+                 o.data_dir, o.scheduler.workers);
+  else
+    spdlog::info("satmesh-server listening on http://{}:{} (data: {}, API node of queue {})", o.host, port,
+                 o.data_dir, o.queue);
   return port;
 }
 

@@ -1,12 +1,13 @@
 #pragma once
 // satmesh-server's HTTP API (OGC API - Processes style, RFC 7807 errors), bound to a
-// JobExecutor through the Scheduler. Routes in api.cc, documents in api_documents.cc.
+// JobExecutor through a JobQueue (the embedded Scheduler or Redis). Routes in api.cc, documents in api_documents.cc.
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "server/executor.h"
 #include "server/inputs.h"
+#include "server/redis_queue.h"
 #include "server/scheduler.h"
 
 namespace satmesh::server {
@@ -28,7 +29,11 @@ struct ServerOptions {
                                          // tiling.memory_budget_mb, MB, >= 0; 0: a quarter
                                          // of the machine's memory / scheduler.workers
   InputPolicy inputs;
-  SchedulerOptions scheduler;
+  SchedulerOptions scheduler;            // the embedded queue (queue = "")
+  // "" = the embedded queue (tiles run in this process); redis://HOST[:PORT][/DB] = an API
+  // node of the Redis queue (redis_queue.h): tiles run on satmesh-worker processes.
+  std::string queue;
+  RedisQueueOptions redis;               // its settings (url taken from `queue`)
   std::string Check() const;
 };
 

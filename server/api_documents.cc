@@ -172,6 +172,9 @@ std::string PrometheusText(const SchedulerStats& s) {
   }
   o << "satmesh_tile_duration_seconds_sum " << s.duration_sum_s << "\n"
     << "satmesh_tile_duration_seconds_count " << s.tiles_done << "\n";
+  if (s.workers_seen >= 0)
+    o << "# HELP satmesh_workers_seen Queue workers seen in the last minute.\n"
+      << "# TYPE satmesh_workers_seen gauge\nsatmesh_workers_seen " << s.workers_seen << "\n";
   return o.str();
 }
 

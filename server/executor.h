@@ -18,6 +18,12 @@ struct TileKey {
   bool operator==(const TileKey&) const = default;
 };
 
+// A tile result record's failure, from RunTile's record: false for a successful one.
+// Sets *code (ErrorCodeName: "no-space", ...) and *message when failed.
+bool TileRecordFailed(const nlohmann::json& record, std::string* code, std::string* message);
+// The record of a tile that failed outside the engine (an exception, a dead letter).
+nlohmann::json FailedTileRecord(const TileKey& tile, const std::string& code, const std::string& message);
+
 struct ExecutionPlan {
   std::vector<TileKey> tiles;  // in processing order
   int64_t pixels = 0;          // total image pixels the job reads (limits)
@@ -29,15 +35,19 @@ class JobExecutor {
   // Checks the inputs (throws Error naming the field/file) and splits the job into tiles.
   virtual ExecutionPlan Plan(const JobSpec& spec) = 0;
   // Refines one tile; writes job_dir/tiles/<x>_<y>.glb (and any per-tile work files).
-  // Returns the tile's result record: the scheduler persists it with the tile and hands
-  // it back to Assemble (also after a restart). Throws Error naming the reason when the
-  // tile fails, Error{kCancelled} when progress.Cancelled() turns true. Re-running a
-  // tile must be harmless (files written to a temporary name and renamed).
+  // Returns the tile's result record (proto's TileResultToJson: "status" "successful" or
+  // "failed" with "error": {"code", "message"}): the scheduler persists it with the tile
+  // and hands it back to Assemble (also after a restart, or on another machine). A failing
+  // tile is a record, not an exception (core/tiling/job.h's failure policy: that tile
+  // fails, the others go on); throws only Error{kCancelled} when progress.Cancelled()
+  // turns true (any other exception is that tile's failure). Re-running a tile must be
+  // harmless (files written to a temporary name and renamed).
   virtual nlohmann::json RunTile(const JobSpec& spec, const TileKey& tile,
                                  const std::string& job_dir, const Progress& progress) = 0;
-  // After every tile is done: writes job_dir/tileset.json, metrics.json (and mesh.ply,
-  // dsm.tif where the engine makes them); returns the metrics. tile_results[i] is what
-  // RunTile returned for tiles[i].
+  // After every tile finished (done or failed, at least one done): writes
+  // job_dir/tileset.json, metrics.json (and mesh.ply, dsm.tif where the engine makes
+  // them) from the successful tiles; returns the metrics. tile_results[i] is what RunTile
+  // returned for tiles[i] (failed ones included).
   virtual nlohmann::json Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
                                   const std::vector<nlohmann::json>& tile_results,
                                   const std::string& job_dir) = 0;

@@ -1,11 +1,16 @@
 #include "server/real_executor.h"
 
 #include <Eigen/Core>
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "core/common/error.h"
 #include "core/image/image_io.h"
@@ -42,11 +47,50 @@ json BoundingBox(const TriangleMesh& mesh) {
   return json::array({c.x(), c.y(), c.z(), h.x(), 0, 0, 0, h.y(), 0, 0, 0, h.z()});
 }
 
+// The job's biases (core/tiling/job.h, step 1b), once per job for every process that runs
+// its tiles: the first tile to get here estimates them under an exclusive lock on
+// job_dir/job_biases.lock and writes job_dir/job_biases.json; the others wait for the lock
+// (cancellable) and read the file.
+JobBiases JobBiasesFor(const JobSpec& spec, const JobPlan& plan, const std::string& job_dir,
+                       const Progress& progress) {
+  if (plan.tiles.size() <= 1 || !spec.refine.estimate_bias) return {};
+  const fs::path path = fs::path(job_dir) / "job_biases.json";
+  fs::create_directories(job_dir);
+  const std::string lock_path = (fs::path(job_dir) / "job_biases.lock").string();
+  const int fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) ThrowIoError("cannot open '" + lock_path + "'", errno);
+  struct Unlock {
+    int fd;
+    ~Unlock() { ::flock(fd, LOCK_UN), ::close(fd); }
+  } unlock{fd};
+  while (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    progress.ThrowIfCancelled();
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  if (fs::exists(path)) return proto::JobBiasesFromJson(ReadJsonFile(path.string()));
+  const JobBiases biases = EstimateJobBiasesOnce(spec, plan, progress);
+  WriteFileAtomic(path.string(), proto::JobBiasesToJson(biases).dump());
+  return biases;
+}
+
 double UnixSeconds() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
 }  // namespace
+
+bool TileRecordFailed(const json& record, std::string* code, std::string* message) {
+  if (!record.is_object() || record.value("status", "") != "failed") return false;
+  const json error = record.value("error", json::object());
+  *code = error.is_object() ? error.value("code", "internal") : "internal";
+  *message = error.is_object() ? error.value("message", "") : "";
+  return true;
+}
+
+json FailedTileRecord(const TileKey& tile, const std::string& code, const std::string& message) {
+  return {{"name", tile.Name()}, {"x", tile.x}, {"y", tile.y}, {"status", "failed"},
+          {"error", {{"code", code}, {"message", message}}}};
+}
 
 void WriteFileAtomic(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".tmp";
@@ -102,8 +146,9 @@ json RealExecutor::RunTile(const JobSpec& spec, const TileKey& key, const std::s
   const int index = plan.IndexOf(key.x, key.y);
   SATMESH_CHECK(index >= 0, ErrorCode::kInternal, "tile " + key.Name() + " is not in the job's plan");
   const double started = UnixSeconds();
-  const TileResult result = satmesh::RunTile(spec, plan, index, job_dir, progress);
-  if (!result.ok) ThrowError(result.error_code, result.error);
+  const JobBiases biases = JobBiasesFor(spec, plan, job_dir, progress);
+  TileResult result = satmesh::RunTile(TileSpec(spec, biases), plan, index, job_dir, progress);
+  SetJobBiases(spec, biases, &result);
   json record = proto::TileResultToJson(plan, result);
   record["started_unix_s"] = started;  // the job's wall time at assembly: first start -> end
   return record;
@@ -111,18 +156,23 @@ json RealExecutor::RunTile(const JobSpec& spec, const TileKey& key, const std::s
 
 json RealExecutor::Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
                             const std::vector<json>& tile_results, const std::string& job_dir) {
-  JobOutputs outputs;
-  outputs.plan = PlanJob(spec);
+  const JobPlan plan = PlanJob(spec);
+  std::vector<TileResult> results(plan.tiles.size());
   double first_start = UnixSeconds();
   for (const json& r : tile_results) {
-    outputs.tiles.push_back(proto::TileResultFromJson(outputs.plan, r));
+    TileResult tile = proto::TileResultFromJson(plan, r);
+    const int index = tile.index;
+    results.at(size_t(index)) = std::move(tile);
     first_start = std::min(first_start, r.value("started_unix_s", first_start));
   }
-  outputs.assembly = AssembleOutputs(outputs.plan, outputs.tiles, job_dir);
-  outputs.mesh_path = outputs.assembly.mesh_path;
-  outputs.dsm_path = outputs.assembly.dsm_path;
-  for (const auto& t : outputs.tiles) outputs.prepare_s += t.prepare_s, outputs.write_s += t.write_s;
-  outputs.write_s += outputs.assembly.assemble_s;
+  JobOutputs outputs = AssembleJob(plan, std::move(results), job_dir);
+  const fs::path biases_path = fs::path(job_dir) / "job_biases.json";
+  if (fs::exists(biases_path)) {
+    const JobBiases biases = proto::JobBiasesFromJson(ReadJsonFile(biases_path.string()));
+    outputs.job_bias_px = biases.bias_px;
+    outputs.bias_tile = biases.tile;
+    outputs.bias_s = biases.seconds;
+  }
   // Tiles ran on the server's workers, possibly across restarts: the job's time is from
   // its first tile's start to now (queueing behind other jobs included).
   outputs.total_s = UnixSeconds() - first_start;

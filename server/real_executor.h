@@ -4,10 +4,12 @@
 
 namespace satmesh::server {
 
-// The tiled pipeline of core/tiling: Plan = PlanJob (DSM header only, so RunTile and
-// Assemble re-plan instead of keeping state), RunTile = core RunTile into job_dir
-// (tiles/<x>_<y>.glb, .ply, .tif), Assemble = AssembleOutputs (mesh.ply, dsm.tif) plus
-// tileset.json and metrics.json written through proto/.
+// The tiled pipeline of core/tiling (job.h): Plan = PlanJob (DSM header only, so RunTile
+// and Assemble re-plan instead of keeping state), RunTile = core RunTile into job_dir
+// (tiles/<x>_<y>.glb, .ply, .tif) with the job's biases (estimated once, by the first
+// tile, into job_dir/job_biases.json under job_dir/job_biases.lock: any process, any
+// machine sharing job_dir), Assemble = AssembleJob (mesh.ply, dsm.tif) plus tileset.json
+// and metrics.json written through proto/.
 class RealExecutor : public JobExecutor {
  public:
   ExecutionPlan Plan(const JobSpec& spec) override;

@@ -27,12 +27,33 @@ std::string NewJobId() {
   return buf;
 }
 
-bool AllDone(const JobRecord& r) {
-  return std::all_of(r.tiles.begin(), r.tiles.end(),
-                     [](const TileRecord& t) { return t.status == TileStatus::kDone; });
+// Every tile finished: done or failed (the failure policy of core/tiling/job.h).
+bool AllFinished(const JobRecord& r) {
+  return std::all_of(r.tiles.begin(), r.tiles.end(), [](const TileRecord& t) {
+    return t.status == TileStatus::kDone || t.status == TileStatus::kFailed;
+  });
 }
 
 }  // namespace
+
+std::string NoTileDoneMessage(const JobRecord& r) {
+  for (const TileRecord& t : r.tiles)
+    if (t.status == TileStatus::kDone) return "";
+  if (r.tiles.empty()) return "the job has no tile";
+  const TileRecord& first = r.tiles.front();
+  return (r.tiles.size() == 1 ? "tile " : "every tile failed; first: tile ") + first.key.Name() + ": " +
+         first.message;
+}
+
+std::string DoneMessage(const JobRecord& r) {
+  const auto failed = std::count_if(r.tiles.begin(), r.tiles.end(),
+                                    [](const TileRecord& t) { return t.status == TileStatus::kFailed; });
+  for (const TileRecord& t : r.tiles)
+    if (t.status == TileStatus::kFailed)
+      return "done; " + std::to_string(failed) + " of " + std::to_string(r.tiles.size()) +
+             " tiles failed; first: tile " + t.key.Name() + ": " + t.message;
+  return "done";
+}
 
 std::string SchedulerOptions::Check() const {
   if (workers < 1 || workers > 256) return "workers: " + std::to_string(workers) + " not in [1, 256]";
@@ -262,9 +283,17 @@ void Scheduler::WorkerLoop() {
         const bool more = std::any_of(tiles.begin(), tiles.end(),
                                       [](const TileRecord& x) { return x.status == TileStatus::kQueued; });
         if (more) ready_.push_back(id);  // round robin: back of the line
-      } else if (AllDone(e.record) && !e.record.assembled && e.running == 0 && !e.assembling) {
-        e.assembling = true;
-        assemble = true;
+      } else if (AllFinished(e.record) && !e.record.assembled && e.running == 0 && !e.assembling) {
+        const std::string none_done = NoTileDoneMessage(e.record);
+        if (none_done.empty()) {
+          e.assembling = true;
+          assemble = true;
+        } else {  // nothing to assemble: the job fails
+          e.record.status = JobStatus::kFailed;
+          e.record.finished = NowRfc3339();
+          e.record.message = none_done;
+          Touch(&e);
+        }
       } else {
         continue;
       }
@@ -273,7 +302,7 @@ void Scheduler::WorkerLoop() {
     change_cv_.notify_all();
     Persist(id);
     if (assemble) AssembleJob(id);
-    else RunOneTile(id, tile_index);
+    else if (tile_index != SIZE_MAX) RunOneTile(id, tile_index);  // else: failed, nothing to run
   }
 }
 
@@ -302,22 +331,29 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
   std::string message;
   nlohmann::json result;
   const auto t0 = std::chrono::steady_clock::now();
+  // The engine returns a failed tile as a record; an exception other than cancellation is
+  // that tile's failure too (the same policy).
+  std::string code;
   try {
     result = executor_->RunTile(spec, key, store_->JobDir(id), progress);
   } catch (const Error& err) {
-    outcome = err.code() == ErrorCode::kCancelled ? kCancelled
-              : err.code() == ErrorCode::kNoSpace ? kNoSpace : kFailed;
+    outcome = err.code() == ErrorCode::kCancelled ? kCancelled : kFailed;
+    code = ErrorCodeName(err.code());
     message = err.what();
   } catch (const std::exception& err) {
     outcome = kFailed;
+    code = ErrorCodeName(ErrorCode::kInternal);
     message = err.what();
   }
+  if (outcome == kDone && TileRecordFailed(result, &code, &message)) outcome = kFailed;
+  if (outcome == kFailed && code == ErrorCodeName(ErrorCode::kNoSpace)) outcome = kNoSpace;
+  if (outcome == kFailed && !result.is_object()) result = FailedTileRecord(key, code, message);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   bool remove_outputs = false, more_work = false, retry_later = false;
   // A finished tile is written to disk before anyone can see it done, so a tile reported
   // done is never run again after a crash (save_mu_ held until memory matches the disk).
   std::unique_lock save(save_mu_, std::defer_lock);
-  if (outcome == kDone) {
+  if (outcome == kDone || outcome == kFailed) {
     save.lock();
     JobRecord snapshot;
     {
@@ -326,7 +362,8 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
     }
     if (snapshot.status != JobStatus::kDismissed) {
       TileRecord& t = snapshot.tiles[tile_index];
-      t.status = TileStatus::kDone;
+      t.status = outcome == kDone ? TileStatus::kDone : TileStatus::kFailed;
+      t.message = outcome == kDone ? "" : message;
       t.duration_s = seconds;
       t.result = result;
       snapshot.updated = NowRfc3339();
@@ -353,19 +390,16 @@ void Scheduler::RunOneTile(const std::string& id, size_t tile_index) {
       duration_sum_s_ += seconds;
       for (size_t b = 0; b < duration_counts_.size(); ++b)
         if (b == kDurationBuckets.size() || seconds <= kDurationBuckets[b]) ++duration_counts_[b];
-      more_work = AllDone(e.record);
-    } else if (outcome == kFailed) {
+      more_work = AllFinished(e.record);
+    } else if (outcome == kFailed && e.record.status != JobStatus::kDismissed) {
+      // That tile fails; the job's other tiles go on (core/tiling/job.h).
       t.status = TileStatus::kFailed;
       t.message = message;
+      t.progress = 0;
+      t.duration_s = seconds;
+      t.result = std::move(result);
       ++tiles_failed_;
-      if (e.record.status != JobStatus::kDismissed) {
-        e.record.status = JobStatus::kFailed;
-        e.record.finished = NowRfc3339();
-        e.record.message = "tile " + key.Name() + ": " + message;
-        e.cancel->store(true);
-        for (auto& other : e.record.tiles)
-          if (other.status == TileStatus::kQueued) other.status = TileStatus::kCancelled;
-      }
+      more_work = AllFinished(e.record);
     } else if (outcome == kNoSpace && e.record.status != JobStatus::kDismissed) {
       // A full disk is not the tile's fault: back to the queue, retried after a pause.
       t.status = TileStatus::kQueued;
@@ -440,7 +474,7 @@ void Scheduler::AssembleJob(const std::string& id) {
     } else if (e.record.status != JobStatus::kDismissed) {
       e.record.assembled = message.empty();
       e.record.status = message.empty() ? JobStatus::kSuccessful : JobStatus::kFailed;
-      e.record.message = message.empty() ? "done" : message;
+      e.record.message = message.empty() ? DoneMessage(e.record) : message;
       e.record.finished = NowRfc3339();
     }
     remove_outputs = e.record.status == JobStatus::kDismissed;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "server/executor.h"
+#include "server/job_queue.h"
 #include "server/store.h"
 
 namespace satmesh::server {
@@ -26,39 +27,31 @@ struct SchedulerOptions {
   std::string Check() const;
 };
 
-struct SchedulerStats {
-  int tiles_queued = 0, tiles_running = 0;   // now
-  int64_t tiles_done = 0, tiles_failed = 0;  // since start
-  std::map<std::string, int> jobs_by_status;
-  std::vector<double> duration_buckets_s;    // histogram upper bounds (+Inf implied)
-  std::vector<int64_t> duration_counts;      // cumulative, one more than buckets (+Inf)
-  double duration_sum_s = 0;
-};
-
-class Scheduler {
+// The embedded queue (the default): jobs in this process, state in the JobStore.
+class Scheduler : public JobQueue {
  public:
   Scheduler(JobStore* store, JobExecutor* executor, const SchedulerOptions& options);
-  ~Scheduler();
+  ~Scheduler() override;
   // Loads the store's jobs (unfinished tiles go back to the queue) and starts the workers.
-  void Start();
+  void Start() override;
   // Stops the workers; running tiles are cancelled and stay queued for the next start.
-  void Stop();
+  void Stop() override;
 
   // Adds a validated, planned job. With a non-empty idempotency key already used, returns
   // that job instead and sets *created = false.
   JobRecord Submit(const nlohmann::json& request, const JobSpec& spec, const ExecutionPlan& plan,
-                   const std::string& idempotency_key, bool* created);
-  std::optional<JobRecord> Get(const std::string& id) const;
+                   const std::string& idempotency_key, bool* created) override;
+  std::optional<JobRecord> Get(const std::string& id) const override;
   // Newest first; status filter optional; at most `limit`.
-  std::vector<JobRecord> List(std::optional<JobStatus> status, size_t limit) const;
+  std::vector<JobRecord> List(std::optional<JobStatus> status, size_t limit) const override;
   // Cancels the job's tiles and marks it dismissed; std::nullopt for an unknown id.
-  std::optional<JobRecord> Dismiss(const std::string& id);
+  std::optional<JobRecord> Dismiss(const std::string& id) override;
   // Blocks until the job changes after `version` or the timeout passes; returns the
   // current change counter (for progress streams).
-  uint64_t WaitForChange(uint64_t version, int timeout_ms) const;
-  uint64_t version() const;
-  SchedulerStats Stats() const;
-  std::string JobDir(const std::string& id) const { return store_->JobDir(id); }
+  uint64_t WaitForChange(uint64_t version, int timeout_ms) const override;
+  uint64_t version() const override;
+  SchedulerStats Stats() const override;
+  std::string JobDir(const std::string& id) const override { return store_->JobDir(id); }
 
  private:
   struct Entry {

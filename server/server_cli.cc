@@ -31,7 +31,9 @@ std::string ServerUsage() {
          "         [--max-images 64] [--max-tiles 1024] [--max-pixels 4000000000]\n"
          "         [--max-mesh-faces 20000000]\n"
          "         [--http-threads 32] [--proto-dir DIR] [--viewer-dir DIR | env SATMESH_VIEWER_DIR]\n"
-         "         [--cors-origin https://example.org ... | --cors-origin '*'] [--memory-budget MB]\n";
+         "         [--cors-origin https://example.org ... | --cors-origin '*'] [--memory-budget MB]\n"
+         "         [--queue redis://HOST:PORT[/DB] [--queue-prefix satmesh]]  (an API node: tiles run\n"
+         "          on satmesh-worker processes with the same queue and prefix)\n";
 }
 
 ServerOptions ParseServerArgs(const std::vector<std::string>& args,
@@ -64,6 +66,8 @@ ServerOptions ParseServerArgs(const std::vector<std::string>& args,
     else if (key == "viewer-dir") o.viewer_dir = value;
     else if (key == "cors-origin") o.cors_origins.push_back(value);
     else if (key == "memory-budget") o.memory_budget_mb = double(ToInteger(key, value));
+    else if (key == "queue") o.queue = value;
+    else if (key == "queue-prefix") o.redis.prefix = value;
     else {
       bool known = false;
       for (const auto& k : extra_keys) known = known || k == key;

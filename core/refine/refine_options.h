@@ -55,9 +55,11 @@ struct RefineOptions {
                                    // first and last; in between each pixel keeps its face
                                    // and its point follows the face (FollowHitMaps)
   double coarse_edge_px = 2.0;     // edge length of the coarse mesh at level L, in level px
-  double flat_tolerance_gsd = 0.0;  // between levels only faces near a vertex off the plane
-                                   // of its neighbours by more than this (level GSD) are
-                                   // subdivided (mesh_resolution.h); 0: all faces
+  double flat_tolerance_gsd = 1.0;  // between levels only faces near a vertex off the plane
+                                   // of its neighbours by more than this (GSD of the level
+                                   // just finished) are subdivided; planar parts keep the
+                                   // coarser triangles (mesh_resolution.h; BENCHMARKS.md,
+                                   // session 12); 0: all faces (the paper)
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous

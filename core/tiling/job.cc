@@ -80,6 +80,45 @@ std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPla
   return bias;
 }
 
+JobBiases EstimateJobBiasesOnce(const JobSpec& spec, const JobPlan& plan, const Progress& progress) {
+  JobBiases out;
+  if (plan.tiles.size() <= 1 || !spec.refine.estimate_bias) return out;
+  const auto t0 = Clock::now();
+  int index = 0;
+  try {
+    out.bias_px = EstimateJobBiases(spec, plan, &index, progress);
+    out.tile = plan.tiles[index].Name();
+    spdlog::info("job: biases estimated once over tile {} ({:.1f} s), used by all {} tiles", out.tile,
+                 Seconds(t0), plan.tiles.size());
+  } catch (const Error& e) {  // e.g. the central tile has no surface: each tile estimates
+    if (e.code() == ErrorCode::kCancelled) throw;
+    out.bias_px.clear();
+    spdlog::warn("job: biases not estimated over tile {} ({}); each tile estimates its own",
+                 plan.tiles[index].Name(), e.what());
+  }
+  out.seconds = Seconds(t0);
+  return out;
+}
+
+JobSpec TileSpec(const JobSpec& spec, const JobBiases& biases) {
+  if (biases.bias_px.empty()) return spec;
+  SATMESH_CHECK(biases.bias_px.size() == spec.images.size(), ErrorCode::kInternal,
+                "job biases: " + std::to_string(biases.bias_px.size()) + " for " +
+                    std::to_string(spec.images.size()) + " images");
+  JobSpec tile_spec = spec;
+  for (size_t i = 0; i < spec.images.size(); ++i) tile_spec.images[i].bias_col_row_px += biases.bias_px[i];
+  tile_spec.refine.estimate_bias = false;
+  return tile_spec;
+}
+
+void SetJobBiases(const JobSpec& spec, const JobBiases& biases, TileResult* tile) {
+  if (biases.bias_px.empty()) return;
+  tile->view_bias_px.clear();
+  for (const std::string& name : tile->view_names)
+    for (size_t i = 0; i < spec.images.size(); ++i)
+      if (spec.images[i].path == name) tile->view_bias_px.push_back(biases.bias_px[i]);
+}
+
 std::string JobSpec::Check() const {
   if (images.size() < 2) return "images: need at least 2, got " + std::to_string(images.size());
   for (size_t i = 0; i < images.size(); ++i)
@@ -100,6 +139,26 @@ std::string JobSpec::Check() const {
   return "";
 }
 
+JobOutputs AssembleJob(const JobPlan& plan, std::vector<TileResult> tiles, const std::string& out_dir) {
+  SATMESH_CHECK(tiles.size() == plan.tiles.size(), ErrorCode::kInternal,
+                "assembly: " + std::to_string(tiles.size()) + " tile results for " +
+                    std::to_string(plan.tiles.size()) + " planned tiles");
+  const auto failed = [](const TileResult& t) { return !t.ok; };
+  if (std::all_of(tiles.begin(), tiles.end(), failed))
+    ThrowError(tiles[0].error_code, tiles.size() == 1 ? tiles[0].error
+                                                      : "every tile failed; first: " + tiles[0].name +
+                                                            ": " + tiles[0].error);
+  JobOutputs out;
+  out.plan = plan;
+  out.tiles = std::move(tiles);
+  out.assembly = AssembleOutputs(out.plan, out.tiles, out_dir);
+  out.mesh_path = out.assembly.mesh_path;
+  out.dsm_path = out.assembly.dsm_path;
+  for (const auto& t : out.tiles) out.prepare_s += t.prepare_s, out.write_s += t.write_s;
+  out.write_s += out.assembly.assemble_s;
+  return out;
+}
+
 JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progress& progress) {
   const auto t_start = Clock::now();
   JobOutputs out;
@@ -110,26 +169,11 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
 
   // Tiled: the biases once for the job (every tile then refines with the same RPCs).
   const size_t n = out.plan.tiles.size();
-  JobSpec tile_spec = spec;
-  if (n > 1 && spec.refine.estimate_bias) {
-    const auto t_bias = Clock::now();
-    int index = 0;
-    try {
-      out.job_bias_px = EstimateJobBiases(spec, out.plan, &index, progress);
-      out.bias_tile = out.plan.tiles[index].Name();
-      for (size_t i = 0; i < spec.images.size(); ++i)
-        tile_spec.images[i].bias_col_row_px += out.job_bias_px[i];
-      tile_spec.refine.estimate_bias = false;
-      spdlog::info("job: biases estimated once over tile {} ({:.1f} s), used by all {} tiles",
-                   out.bias_tile, Seconds(t_bias), n);
-    } catch (const Error& e) {  // e.g. the central tile has no surface: each tile estimates
-      if (e.code() == ErrorCode::kCancelled) throw;
-      out.job_bias_px.clear();
-      spdlog::warn("job: biases not estimated over tile {} ({}); each tile estimates its own",
-                   out.plan.tiles[index].Name(), e.what());
-    }
-    out.bias_s = Seconds(t_bias);
-  }
+  const JobBiases biases = EstimateJobBiasesOnce(spec, out.plan, progress);
+  out.job_bias_px = biases.bias_px;
+  out.bias_tile = biases.tile;
+  out.bias_s = biases.seconds;
+  const JobSpec tile_spec = TileSpec(spec, biases);
 
   // Worker pool: each thread takes the next tile until none is left.
   const bool single = n == 1;
@@ -161,25 +205,16 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
   }
   out.tiles_s = Seconds(t_tiles);
   // The job's biases, in each tile's view order, as a tile that estimated them reports.
-  if (!out.job_bias_px.empty())
-    for (TileResult& t : out.tiles) {
-      t.view_bias_px.clear();
-      for (const std::string& name : t.view_names)
-        for (size_t i = 0; i < spec.images.size(); ++i)
-          if (spec.images[i].path == name) t.view_bias_px.push_back(out.job_bias_px[i]);
-    }
+  for (TileResult& t : out.tiles) SetJobBiases(spec, biases, &t);
   if (cancelled || progress.Cancelled()) ThrowError(ErrorCode::kCancelled, "cancelled by the caller");
 
-  const auto failed = [](const TileResult& t) { return !t.ok; };
-  if (std::all_of(out.tiles.begin(), out.tiles.end(), failed))
-    ThrowError(out.tiles[0].error_code, single ? out.tiles[0].error
-                                               : "every tile failed; first: " + out.tiles[0].name +
-                                                     ": " + out.tiles[0].error);
-  out.assembly = AssembleOutputs(out.plan, out.tiles, out_dir);
-  out.mesh_path = out.assembly.mesh_path;
-  out.dsm_path = out.assembly.dsm_path;
-  for (const auto& t : out.tiles) out.prepare_s += t.prepare_s, out.write_s += t.write_s;
-  out.write_s += out.assembly.assemble_s;
+  JobOutputs assembled = AssembleJob(out.plan, std::move(out.tiles), out_dir);
+  out.tiles = std::move(assembled.tiles);
+  out.assembly = std::move(assembled.assembly);
+  out.mesh_path = assembled.mesh_path;
+  out.dsm_path = assembled.dsm_path;
+  out.prepare_s = assembled.prepare_s;
+  out.write_s = assembled.write_s;
   if (single && out.tiles[0].ok) {
     out.refine = out.tiles[0].refine;
     out.view_names = out.tiles[0].view_names;

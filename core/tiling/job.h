@@ -1,6 +1,17 @@
 #pragma once
-// The in-process job runner: PlanJob -> RunTile on a worker pool -> AssembleOutputs.
-// The server calls the same three stages itself (tile_plan.h, tile_run.h, assemble.h).
+// The job's one tile pipeline, as the CLI (RunJob, in-process), the embedded server and
+// the queue's workers (server/) all run it:
+//   1. plan      PlanJob (tile_plan.h) + CheckJobInputs (input_check.h); tiled jobs with
+//                refine.estimate_bias: EstimateJobBiasesOnce, and every tile refines with
+//                TileSpec (the job's biases, not its own)
+//   2. tiles     RunTile (tile_run.h) for every planned tile: any order, any thread,
+//                process or machine, again if need be (files written atomically)
+//   3. assemble  AssembleJob (below), once, over every tile's result
+// Tile failure policy (the one for every caller): a tile that fails is recorded as failed,
+// with its error code and reason (TileResult::ok, error_code, error); the job's other
+// tiles go on; the job is assembled from the successful tiles (a failed tile's cells stay
+// nodata, the metrics count it) and fails only when no tile succeeded. Cancellation
+// (Error{kCancelled}) stops every tile and the job.
 #include <string>
 #include <vector>
 
@@ -42,8 +53,29 @@ struct JobOutputs {
 std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPlan& plan,
                                                int* tile_index, const Progress& progress = {});
 
-// Plans, refines every tile on spec.tiling.workers threads (a failing tile is recorded
-// with its reason and the others still finish), then assembles out_dir/mesh.ply,
+// Step 1b: the job's biases, estimated once over the central tile (EstimateJobBiases).
+struct JobBiases {
+  std::vector<Eigen::Vector2d> bias_px;  // spec.images order; empty: each tile estimates its own
+  std::string tile;                      // the tile they were estimated over
+  double seconds = 0;                    // their time (that tile's windows read included)
+};
+// Empty for a one-tile job, without refine.estimate_bias, or when the central tile cannot
+// give them (no surface, no pair; logged). Throws Error{kCancelled} when cancelled.
+JobBiases EstimateJobBiasesOnce(const JobSpec& spec, const JobPlan& plan, const Progress& progress = {});
+// The spec every tile refines with: the job's biases added to the images', estimate_bias
+// off; `spec` itself when there are none.
+JobSpec TileSpec(const JobSpec& spec, const JobBiases& biases);
+// A tile's view_bias_px as the job's biases in its view order (as a tile that estimated
+// its own reports them); unchanged when there are none.
+void SetJobBiases(const JobSpec& spec, const JobBiases& biases, TileResult* tile);
+
+// Step 3: assembles out_dir/mesh.ply, dsm.tif and the tileset from the tiles' results
+// (one per planned tile, in plan order; their files under out_dir/tiles/), and sums their
+// timings into the outputs (plan, tiles, assembly, paths, prepare_s, write_s). Throws
+// Error (the first tile's code) naming the first failed tile when no tile succeeded.
+JobOutputs AssembleJob(const JobPlan& plan, std::vector<TileResult> tiles, const std::string& out_dir);
+
+// Plans, refines every tile on spec.tiling.workers threads (the failure policy above), then assembles out_dir/mesh.ply,
 // out_dir/dsm.tif and out_dir/tiles/. tileset.json and metrics.json are JSON: proto/
 // writes them (proto::WriteJobJson). Throws Error for an invalid spec or unreadable DSM,
 // Error{kCancelled} when cancelled; never for one failing tile.

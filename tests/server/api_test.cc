@@ -276,13 +276,40 @@ TEST(Api, BearerTokenRequiredExceptHealth) {
   EXPECT_EQ(c.Get("/jobs")->status, 200);
 }
 
-TEST(Api, FailingTileFailsTheJob) {
-  TestServer s("fail", Stub(2, 1, 10, "1_0"));
+// The failure policy of core/tiling/job.h: a failing tile fails that tile, the job's other
+// tiles go on and the job is assembled from them; it fails only when every tile failed.
+TEST(Api, FailingTileFailsOnlyThatTile) {
+  TestServer s("fail", Stub(3, 1, 10, "1_0"));
+  s.Start();
+  auto c = s.Client();
+  const std::string id = Submit(s, MakeStubJob(s.root));
+  const json info = WaitFor(s, id, "successful");
+  ASSERT_EQ(info["status"], "successful") << info.dump();
+  EXPECT_NE(info["message"].get<std::string>().find("1 of 3 tiles failed"), std::string::npos) << info.dump();
+  EXPECT_NE(info["message"].get<std::string>().find("tile 1_0"), std::string::npos) << info.dump();
+  const json tiles = Json(c.Get(("/jobs/" + id + "/tiles").c_str()))["tiles"];
+  ASSERT_EQ(tiles.size(), 3u);
+  for (const auto& t : tiles) {
+    const bool failing = t["x"] == 1;
+    EXPECT_EQ(t["status"], failing ? "failed" : "done") << t.dump();
+    if (failing) {
+      EXPECT_NE(t["message"].get<std::string>().find("stub: tile 1_0 fails"), std::string::npos);
+    }
+  }
+  EXPECT_EQ(c.Get(("/jobs/" + id + "/results").c_str())->status, 200);
+  EXPECT_EQ(c.Get(("/jobs/" + id + "/tiles/0_0.glb").c_str())->status, 200);
+  EXPECT_EQ(c.Get(("/jobs/" + id + "/tiles/1_0.glb").c_str())->status, 404);
+  const json metrics = Json(c.Get(("/jobs/" + id + "/results/metrics.json").c_str()));
+  EXPECT_EQ(metrics["tiles"], 2);
+}
+
+TEST(Api, JobFailsWhenEveryTileFailed) {
+  TestServer s("fail_all", Stub(1, 1, 10, "0_0"));
   s.Start();
   const std::string id = Submit(s, MakeStubJob(s.root));
   const json info = WaitFor(s, id, "failed");
   ASSERT_EQ(info["status"], "failed");
-  EXPECT_NE(info["message"].get<std::string>().find("tile 1_0"), std::string::npos);
+  EXPECT_NE(info["message"].get<std::string>().find("tile 0_0"), std::string::npos) << info.dump();
   EXPECT_EQ(s.Client().Get(("/jobs/" + id + "/results").c_str())->status, 422);
 }
 

@@ -6,6 +6,7 @@
 #include <functional>
 #include <fstream>
 
+#include "core/dsm/dsm.h"
 #include "core/mesh/mesh_io.h"
 #include "core/synth/scene_writer.h"
 #include "core/tiling/job.h"
@@ -182,6 +183,75 @@ TEST(EndToEnd, MultiTileMetricsAreFilledAsInProcess) {
               expected["levels"].back()["mean_zncc_end"].get<double>(), 1e-4);
   EXPECT_GT(expected["totals"]["peak_rss_mb"].get<double>(), 10.0);
   server.Stop();
+}
+
+// The failure policy of core/tiling/job.h through the server, as in-process: a tile with
+// no surface (the east half of the initial DSM is nodata) fails that tile only; the job is
+// assembled from the others, equal to RunJob's.
+TEST(EndToEnd, AFailingTileFailsThatTileOnlyAsInProcess) {
+  const std::string dir = TempDir("e2e_failing_tile");
+  const std::string scene = dir + "/scene";
+  synth::SynthOptions o = synth::SynthPreset("small", /*seed=*/3);
+  o.city.aoi_size_m = 36;
+  o.city.ground_margin_m = 45;
+  o.city.building_margin_m = 5;
+  o.city.street_pitch_m = 40;
+  o.render.supersample = 1;
+  o.write_preview = false;
+  synth::GenerateScene(scene, o);
+  Dsm initial = ReadDsm(scene + "/initial/dsm.tif");
+  for (int j = 0; j < initial.height; ++j)
+    for (int i = initial.width / 2 - 10; i < initial.width; ++i) initial.at(i, j) = NAN;
+  WriteDsm(scene + "/half.tif", initial);
+  json job = ReadJsonFile(scene + "/job.json");
+  job["initial"]["dsm"] = "half.tif";
+  job["options"]["levels"] = 1;
+  job["options"]["iterations_per_level"] = 1;
+  job["options"]["estimate_bias"] = false;
+  job["tiling"] = {{"size_m", 18}, {"overlap_m", 3}};  // 2 x 2 tiles
+
+  RealExecutor executor;
+  ServerOptions options;
+  options.port = 0;
+  options.data_dir = dir + "/data";
+  options.inputs.data_roots = {scene};
+  options.scheduler.workers = 2;
+  ApiServer server(options, &executor);
+  httplib::Client c("127.0.0.1", server.Start());
+  c.set_read_timeout(30, 0);
+  auto r = c.Post("/processes/refine-mesh/execution", json{{"inputs", {{"job", job}}}}.dump(), "application/json");
+  ASSERT_EQ(r->status, 201) << r->body;
+  const std::string id = Json(r)["jobID"];
+  json info;
+  for (int i = 0; i < 3000; ++i) {
+    info = Json(c.Get(("/jobs/" + id).c_str()));
+    if (info["status"] != "accepted" && info["status"] != "running") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_EQ(info["status"], "successful") << info.dump();
+  EXPECT_NE(info["message"].get<std::string>().find("2 of 4 tiles failed"), std::string::npos) << info.dump();
+  const json tiles = Json(c.Get(("/jobs/" + id + "/tiles").c_str()))["tiles"];
+  ASSERT_EQ(tiles.size(), 4u);
+  for (const auto& t : tiles) {
+    EXPECT_EQ(t["status"], t["x"] == 1 ? "failed" : "done") << t.dump();
+    if (t["x"] == 1) {
+      EXPECT_NE(t["message"].get<std::string>().find("no valid cell"), std::string::npos) << t.dump();
+    }
+  }
+  const json served = Json(c.Get(("/jobs/" + id + "/results").c_str()))["metrics"]["value"];
+  server.Stop();
+
+  const JobOutputs local = RunJob(proto::JobSpecFromJson(job, scene), dir + "/local");
+  const json expected = proto::JobMetricsToJson(local);
+  EXPECT_EQ(local.assembly.tiles_failed, 2);
+  EXPECT_EQ(served["totals"]["successful"], expected["totals"]["successful"]);
+  EXPECT_EQ(served["totals"]["failed"], expected["totals"]["failed"]);
+  EXPECT_EQ(served["totals"]["faces"], expected["totals"]["faces"]);
+  ASSERT_EQ(served["tiles"].size(), expected["tiles"].size());
+  for (size_t t = 0; t < expected["tiles"].size(); ++t) {
+    EXPECT_EQ(served["tiles"][t]["status"], expected["tiles"][t]["status"]);
+    EXPECT_EQ(served["tiles"][t].value("error", json()), expected["tiles"][t].value("error", json()));
+  }
 }
 
 // Bad data is refused at submission with 422 and the checker's message (core/tiling/

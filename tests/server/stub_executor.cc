@@ -40,7 +40,8 @@ nlohmann::json StubExecutor::RunTile(const JobSpec&, const TileKey& tile, const 
     std::this_thread::sleep_for(std::chrono::milliseconds(options_.tile_ms / steps));
     progress.Report(double(i + 1) / steps, "stub");
   }
-  if (tile.Name() == options_.fail_tile) ThrowError(ErrorCode::kInvalidInput, "stub: tile " + tile.Name() + " fails");
+  if (tile.Name() == options_.fail_tile)  // a failed tile is a record (executor.h)
+    return FailedTileRecord(tile, ErrorCodeName(ErrorCode::kInvalidInput), "stub: tile " + tile.Name() + " fails");
   TriangleMesh mesh;
   mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, float(tile.x + tile.y)}};
   mesh.faces = {{0, 1, 2}};
@@ -60,10 +61,16 @@ nlohmann::json StubExecutor::RunTile(const JobSpec&, const TileKey& tile, const 
 nlohmann::json StubExecutor::Assemble(const JobSpec&, const std::vector<TileKey>& tiles,
                                       const std::vector<nlohmann::json>& tile_results,
                                       const std::string& job_dir) {
-  WriteTileset(job_dir, tiles);
+  std::vector<TileKey> done;
   int faces = 0;
-  for (const auto& r : tile_results) faces += r.value("faces", 0);
-  const nlohmann::json metrics = {{"engine", "stub"}, {"tiles", tiles.size()}, {"faces", faces}};
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    std::string code, message;
+    if (TileRecordFailed(tile_results[i], &code, &message)) continue;
+    done.push_back(tiles[i]);
+    faces += tile_results[i].value("faces", 0);
+  }
+  WriteTileset(job_dir, done);
+  const nlohmann::json metrics = {{"engine", "stub"}, {"tiles", done.size()}, {"faces", faces}};
   WriteFileAtomic((fs::path(job_dir) / "metrics.json").string(), metrics.dump());
   return metrics;
 }

@@ -12,7 +12,7 @@ namespace satmesh::server::testing {
 struct StubOptions {
   int tiles_x = 2, tiles_y = 2;  // tile grid, >= 1
   int tile_ms = 50;              // time per tile, ms, >= 0
-  std::string fail_tile;         // a tile name ("1_0") that throws kInvalidInput, "" = none
+  std::string fail_tile;         // a tile name ("1_0") that fails (kInvalidInput), "" = none
 };
 
 inline StubOptions Stub(int tiles_x, int tiles_y, int tile_ms, std::string fail_tile = "") {

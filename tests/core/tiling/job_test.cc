@@ -189,6 +189,15 @@ TEST_F(TiledJob, AFailingTileIsReportedAndTheOthersFinish) {
   EXPECT_EQ(again.faces, o.assembly.faces);
   EXPECT_EQ(again.tileset.region, o.assembly.tileset.region);
   EXPECT_EQ(again.tiles_failed, 2);
+  for (const auto& t : restored)
+    if (!t.ok) {
+      EXPECT_EQ(t.error_code, ErrorCode::kInvalidInput) << t.name;
+    }
+  // The pipeline's assembly step from the restored results (what the server and the
+  // queue's workers call): the same outputs.
+  const JobOutputs assembled = AssembleJob(o.plan, restored, out);
+  EXPECT_EQ(assembled.assembly.faces, o.assembly.faces);
+  EXPECT_EQ(assembled.assembly.tiles_ok, 2);
   EXPECT_TRUE(o.assembly.seams.size() == 1u);  // 0_0 | 0_1 only
 }
 

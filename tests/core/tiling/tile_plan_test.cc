@@ -1,10 +1,8 @@
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
-#include <string>
-
-#include <unistd.h>
 
 #include "core/common/error.h"
 #include "core/geo/crs.h"
@@ -24,9 +22,9 @@ std::string WriteTestDsm(const std::string& name, const std::string& crs = "EPSG
   dsm.z.resize(size_t(dsm.width) * dsm.height);
   for (int j = 0; j < dsm.height; ++j)
     for (int i = 0; i < dsm.width; ++i) dsm.at(i, j) = float(i);
-  // The process id in the name: another test run on the machine removes its own at exit.
+  // Per process: another checkout's test run on the machine may write the same name.
   const auto path = std::filesystem::temp_directory_path() /
-                    ("tiling_plan_" + std::to_string(getpid()) + "_" + name + ".tif");
+                    ("tiling_plan_" + name + "_" + std::to_string(::getpid()) + ".tif");
   WriteDsm(path.string(), dsm);
   testing::RemoveAtExit(path);
   return path.string();
