@@ -1,12 +1,26 @@
 // satmesh refine JOB.json --out DIR [--set key=value ...]
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "client/args.h"
 #include "client/command.h"
 #include "client/refine_runner.h"
+#include "core/tiling/job_spec.h"
 
 namespace satmesh::cli {
 namespace {
+
+// The options of a table (RefineOptionTable(), TilingOptionTable()): the names --set takes.
+template <typename Info>
+void PrintOptions(const char* title, const std::vector<Info>& table) {
+  std::printf("  %s\n", title);
+  for (const Info& option : table) {
+    std::printf("    %-26s %-6s %-10s %.*s\n", std::string(option.name).c_str(),
+                OptionValueText(option.Default()).c_str(), option.RangeText().c_str(),
+                int(option.help.size()), option.help.data());
+  }
+}
 
 int RunRefine(const std::vector<std::string>& argv) {
   const Args args(argv, {"help"});
@@ -20,6 +34,10 @@ int RunRefine(const std::vector<std::string>& argv) {
         "  --memory-budget MB: one worker's peak memory (tiling.memory_budget_mb; default a\n"
         "  quarter of the machine's memory / workers): a job without tiling is cut into\n"
         "  tiles that fit it; a tile that cannot fit is refused, naming budget and need.\n");
+    PrintOptions("Refinement options (--set NAME=VALUE, or the job's \"options\"):",
+                 RefineOptionTable());
+    PrintOptions("Tiling options (--set tiling.NAME=VALUE, or the job's \"tiling\"):",
+                 TilingOptionTable());
     return args.Has("help") ? kExitOk : kExitUsage;
   }
   std::vector<std::string> overrides = args.GetAll("set");

@@ -55,49 +55,33 @@ std::string Resolve(const std::string& href, const std::string& base_dir) {
   return (std::filesystem::path(base_dir) / href).lexically_normal().string();
 }
 
-void ParseOptions(const json& o, RefineOptions* r) {
-  Object(o, "options");
-  for (const auto& [key, v] : o.items()) {
-    const std::string path = "options." + key;
-    if (key == "levels") r->levels = Integer(v, path);
-    else if (key == "max_coarse_edge_m") r->max_coarse_edge_m = Number(v, path);
-    else if (key == "iterations_per_level") r->iterations_per_level = Integer(v, path);
-    else if (key == "alpha") r->alpha = Number(v, path);
-    else if (key == "beta") r->beta = Number(v, path);
-    else if (key == "step") r->step = Number(v, path);
-    else if (key == "max_step_gsd") r->max_step_gsd = Number(v, path);
-    else if (key == "zncc_window_radius") r->zncc_window_radius = Integer(v, path);
-    else if (key == "min_window_valid") r->min_window_valid = Number(v, path);
-    else if (key == "variance_floor") r->variance_floor = Number(v, path);
-    else if (key == "noise_variance_factor") r->noise_variance_factor = Number(v, path);
-    else if (key == "visibility_tolerance_gsd") r->visibility_tolerance_gsd = Number(v, path);
-    else if (key == "min_ray_cos") r->min_ray_cos = Number(v, path);
-    else if (key == "virtual_camera_grid_px") r->virtual_camera_grid_px = Integer(v, path);
-    else if (key == "rasterize_hit_maps") r->rasterize_hit_maps = Boolean(v, path);
-    else if (key == "hit_maps_every") r->hit_maps_every = Integer(v, path);
-    else if (key == "coarse_edge_px") r->coarse_edge_px = Number(v, path);
-    else if (key == "flat_tolerance_gsd") r->flat_tolerance_gsd = Number(v, path);
-    else if (key == "remesh_coarse") r->remesh_coarse = Boolean(v, path);
-    else if (key == "alternate_directions") r->alternate_directions = Boolean(v, path);
-    else if (key == "restart_from_initial") r->restart_from_initial = Boolean(v, path);
-    else if (key == "normalize_by_pair_count") r->normalize_by_pair_count = Boolean(v, path);
-    else if (key == "min_height_confidence") r->min_height_confidence = Number(v, path);
-    else if (key == "height_sigma_gsd") r->height_sigma_gsd = Number(v, path);
-    else if (key == "hold_unseen") r->hold_unseen = Boolean(v, path);
-    else if (key == "hold_boundary_xy") r->hold_boundary_xy = Boolean(v, path);
-    else if (key == "estimate_bias") r->estimate_bias = Boolean(v, path);
-    else if (key == "min_pair_angle_deg") r->pairs.min_angle_deg = Number(v, path);
-    else if (key == "max_pair_angle_deg") r->pairs.max_angle_deg = Number(v, path);
-    else if (key == "optimal_pair_angle_deg") r->pairs.optimal_angle_deg = Number(v, path);
-    else if (key == "min_pair_overlap") r->pairs.min_overlap = Number(v, path);
-    else if (key == "pair_partners_per_view") r->pairs.partners_per_view = Integer(v, path);
-    else if (key == "max_pairs_per_image") r->pairs.max_pairs_per_image = Integer(v, path);
-    else if (key == "max_pairs") r->pairs.max_pairs = Integer(v, path);
-    else if (key == "min_contrast") r->pairs.min_contrast = Number(v, path);
-    else Bad(path, "unknown option");
+OptionValue OptionFromJson(OptionType type, const json& v, const std::string& path) {
+  switch (type) {
+    case OptionType::kBool: return Boolean(v, path);
+    case OptionType::kInt: return Integer(v, path);
+    case OptionType::kDouble: return Number(v, path);
   }
-  const std::string problem = r->Check();
-  if (!problem.empty()) Bad("options", problem);
+  Bad(path, "unknown option type");
+}
+
+// Sets the table's options from the object `o` at `path`; a key not in the table is
+// `unknown` ("unknown option"). The caller checks the result.
+template <typename Info, typename Options>
+void ParseOptionTable(const json& o, const std::string& path, const std::vector<Info>& table,
+                      const char* unknown, Options* options) {
+  Object(o, path);
+  for (const auto& [key, v] : o.items()) {
+    const std::string key_path = path + "." + key;
+    const Info* option = FindOption(table, key);
+    if (option == nullptr) Bad(key_path, unknown);
+    option->Set(options, OptionFromJson(option->type(), v, key_path));
+  }
+}
+
+void ParseOptions(const json& o, RefineOptions* r) {
+  ParseOptionTable(o, "options", RefineOptionTable(), "unknown option", r);
+  const std::string problem = r->Check();  // names the option by its wire name
+  if (!problem.empty()) ThrowError(ErrorCode::kInvalidArgument, "options." + problem);
 }
 
 Eigen::Vector2d Point(const json& j, const std::string& path) {
@@ -126,15 +110,41 @@ void ParseAoi(const json& a, JobAoi* aoi) {
 }
 
 void ParseTiling(const json& t, TilingOptions* tiling) {
-  Object(t, "tiling");
-  CheckKeys(t, "tiling", {"size_m", "overlap_m", "workers", "memory_budget_mb"});
-  if (t.contains("size_m")) tiling->tile_size_m = Number(t["size_m"], "tiling.size_m");
-  if (t.contains("overlap_m")) tiling->overlap_m = Number(t["overlap_m"], "tiling.overlap_m");
-  if (t.contains("workers")) tiling->workers = Integer(t["workers"], "tiling.workers");
-  if (t.contains("memory_budget_mb"))
-    tiling->memory_budget_mb = Number(t["memory_budget_mb"], "tiling.memory_budget_mb");
-  const std::string problem = tiling->Check();
-  if (!problem.empty()) Bad("tiling", problem);
+  ParseOptionTable(t, "tiling", TilingOptionTable(), "unknown field", tiling);
+  const std::string problem = tiling->Check();  // "tiling.<wire name> must be ..."
+  if (!problem.empty()) ThrowError(ErrorCode::kInvalidArgument, problem);
+}
+
+template <typename Info>
+json OptionSchema(const Info& option) {
+  const bool integer = option.type() == OptionType::kInt;
+  const auto bound = [&](double b) { return integer ? json(int(b)) : json(b); };
+  json schema = {
+      {"type", option.type() == OptionType::kBool ? "boolean" : integer ? "integer" : "number"},
+      {"default", std::visit([](auto v) { return json(v); }, option.Default())},
+      {"description", option.help}};
+  const OptionRange& r = option.range;
+  if (r.min) schema[r.min_exclusive ? "exclusiveMinimum" : "minimum"] = bound(*r.min);
+  if (r.max) schema[r.max_exclusive ? "exclusiveMaximum" : "maximum"] = bound(*r.max);
+  return schema;
+}
+
+template <typename Info>
+json OptionTableSchema(const std::vector<Info>& table) {
+  json properties = json::object();
+  for (const Info& option : table) properties[std::string(option.name)] = OptionSchema(option);
+  return properties;
+}
+
+// Throws for a --set key whose option is not in the table, listing the table's names.
+template <typename Info>
+void RequireOption(const std::vector<Info>& table, const std::string& name, const std::string& key,
+                   const std::string& what) {
+  if (FindOption(table, name) != nullptr) return;
+  std::string names;
+  for (const Info& option : table) names += (names.empty() ? "" : ", ") + std::string(option.name);
+  ThrowError(ErrorCode::kInvalidArgument,
+             "--set " + key + ": unknown option; the " + what + " options are " + names);
 }
 
 }  // namespace
@@ -216,11 +226,18 @@ void ApplyOptionOverride(json* job, const std::string& key_equals_value) {
   const auto dot = key.find('.');
   if (key == "aoi" || key == "tiling" || key == "outputs" || key == "initial") {
     (*job)[key] = parsed;  // a whole top-level object, e.g. aoi={"bbox": [...]}
-  } else if (dot == std::string::npos) {
-    (*job)["options"][key] = parsed;  // a refinement option
+  } else if (dot == std::string::npos || key.substr(0, dot) == "options") {
+    const std::string name = dot == std::string::npos ? key : key.substr(dot + 1);
+    RequireOption(RefineOptionTable(), name, key, "refinement");
+    (*job)["options"][name] = parsed;  // a refinement option
   } else {
+    if (key.substr(0, dot) == "tiling")
+      RequireOption(TilingOptionTable(), key.substr(dot + 1), key, "tiling");
     (*job)[key.substr(0, dot)][key.substr(dot + 1)] = parsed;  // e.g. tiling.size_m
   }
 }
+
+json RefineOptionsSchema() { return OptionTableSchema(RefineOptionTable()); }
+json TilingOptionsSchema() { return OptionTableSchema(TilingOptionTable()); }
 
 }  // namespace satmesh::proto

@@ -18,7 +18,15 @@ JobSpec ReadJobFile(const std::string& path);
 // options.levels, "tiling.size_m=100" sets job["tiling"]["size_m"], and
 // 'aoi={"bbox": [...]}' (or tiling=, outputs=, initial=) replaces that top-level object
 // ('initial={"mesh": "runs/a/"}' refines a previous result).
+// A key without a dot (or options.KEY) must be a refinement option (RefineOptionTable()).
 void ApplyOptionOverride(nlohmann::json* job, const std::string& key_equals_value);
+
+// The JSON Schema of each option of RefineOptionTable() / TilingOptionTable() (type,
+// default, minimum/maximum or their exclusive forms, description): what job.schema.json's
+// "options" / "tiling" "properties" hold (a test keeps the file and the process
+// description to them).
+nlohmann::json RefineOptionsSchema();
+nlohmann::json TilingOptionsSchema();
 
 // Outputs (core structs -> JSON). metrics.json: per tile and totals (+ the single-tile
 // refinement stats at top level, as before tiling). tileset.json: 3D Tiles 1.1.

@@ -6,60 +6,123 @@
 
 namespace satmesh {
 namespace {
-std::string Num(double v) { return std::to_string(v); }
-}  // namespace
 
-std::string PairOptions::Check() const {
-  if (!(min_angle_deg > 0 && min_angle_deg < 90))
-    return "pairs.min_angle_deg must be in (0, 90), got " + Num(min_angle_deg);
-  if (!(max_angle_deg > min_angle_deg && max_angle_deg < 90))
-    return "pairs.max_angle_deg must be in (min_angle_deg, 90), got " + Num(max_angle_deg);
-  if (!(optimal_angle_deg >= min_angle_deg && optimal_angle_deg <= max_angle_deg))
-    return "pairs.optimal_angle_deg must be in [min_angle_deg, max_angle_deg], got " +
-           Num(optimal_angle_deg);
-  if (!(min_overlap >= 0 && min_overlap <= 1))
-    return "pairs.min_overlap must be in [0, 1], got " + Num(min_overlap);
-  if (partners_per_view < 1)
-    return "pairs.partners_per_view must be >= 1, got " + Num(partners_per_view);
-  if (max_pairs_per_image < 1)
-    return "pairs.max_pairs_per_image must be >= 1, got " + Num(max_pairs_per_image);
-  if (max_pairs < 0) return "pairs.max_pairs must be >= 0, got " + Num(max_pairs);
-  if (!(min_contrast >= 0)) return "pairs.min_contrast must be >= 0, got " + Num(min_contrast);
+using Range = OptionRange;
+using R = RefineOptions;
+using P = PairOptions;
+
+// Cross-field checks the ranges cannot say (written once; wire names).
+std::string CheckPairAngles(const PairOptions& p) {
+  if (!(p.max_angle_deg > p.min_angle_deg))
+    return "max_pair_angle_deg must be > min_pair_angle_deg (" + OptionValueText(p.min_angle_deg) +
+           "), got " + OptionValueText(p.max_angle_deg);
+  if (!(p.optimal_angle_deg >= p.min_angle_deg && p.optimal_angle_deg <= p.max_angle_deg))
+    return "optimal_pair_angle_deg must be in [min_pair_angle_deg, max_pair_angle_deg] = [" +
+           OptionValueText(p.min_angle_deg) + ", " + OptionValueText(p.max_angle_deg) + "], got " +
+           OptionValueText(p.optimal_angle_deg);
   return "";
 }
 
+}  // namespace
+
+const std::vector<RefineOptionInfo>& RefineOptionTable() {
+  static const std::vector<RefineOptionInfo> table = {
+      {"levels", &R::levels, Range::In(-1, 6),
+       "coarsest pyramid level L (images at 1/2^L); -1: from the GSD and the initial surface's "
+       "cell (the coarse triangle edge stays under max(max_coarse_edge_m, cell))"},
+      {"max_coarse_edge_m", &R::max_coarse_edge_m, Range::Above(0),
+       "levels -1: bound of the coarse mesh's triangle edge, m"},
+      {"iterations_per_level", &R::iterations_per_level, Range::In(0, 1000),
+       "gradient steps per level"},
+      {"alpha", &R::alpha, Range::AtLeast(0), "weight of the photometric term (ZNCC)"},
+      {"beta", &R::beta, Range::AtLeast(0),
+       "weight of the thin-plate term (homogenised by 1/GSD^2)"},
+      {"step", &R::step, Range::Above(0), "gradient step, in units of (level GSD)^2"},
+      {"max_step_gsd", &R::max_step_gsd, Range::Above(0),
+       "clamp of one vertex's move per iteration, in level GSD"},
+      {"zncc_window_radius", &R::zncc_window_radius, Range::In(1, 7),
+       "ZNCC window radius r: (2r+1)^2 pixels"},
+      {"min_window_valid", &R::min_window_valid, Range::AboveTo(0, 1),
+       "min fraction of valid pixels in a ZNCC window"},
+      {"variance_floor", &R::variance_floor, Range::Above(0),
+       "floor of the ZNCC windows' variances (unit-range images)"},
+      {"noise_variance_factor", &R::noise_variance_factor, Range::AtLeast(0),
+       "the ZNCC variance floor is raised to this times the images' estimated noise variance at "
+       "the level; 0: fixed floor"},
+      {"visibility_tolerance_gsd", &R::visibility_tolerance_gsd, Range::Above(0),
+       "depth test tolerance, in level GSD"},
+      {"min_ray_cos", &R::min_ray_cos, Range::FromBelow(0, 1),
+       "pixels whose ray meets the face at |cos| below this are ignored (grazing views)"},
+      {"virtual_camera_grid_px", &R::virtual_camera_grid_px, Range::AtLeast(1),
+       "spacing of exactly localised rays, in level pixels"},
+      {"rasterize_hit_maps", &R::rasterize_hit_maps, {},
+       "hit maps by z-buffer rasterization through the RFM; false: Embree ray casting"},
+      {"hit_maps_every", &R::hit_maps_every, Range::In(1, 20),
+       "hit maps made anew every N iterations (and at a level's first and last); in between, "
+       "each pixel keeps its face and its hit point follows the moving face"},
+      {"coarse_edge_px", &R::coarse_edge_px, Range::Above(0),
+       "edge length of the coarse mesh at the coarsest level, in level pixels"},
+      {"flat_tolerance_gsd", &R::flat_tolerance_gsd, Range::AtLeast(0),
+       "between levels only faces near a vertex off the plane of its neighbours by more than "
+       "this many level GSDs are subdivided; planar parts keep larger triangles; 0: all faces"},
+      {"remesh_coarse", &R::remesh_coarse, {},
+       "isotropic remeshing of the coarse mesh; false: keep the input's triangles"},
+      {"restart_from_initial", &R::restart_from_initial, {},
+       "below the coarsest level, continue from the initial surface unless the previous level's "
+       "result matches the images better"},
+      {"alternate_directions", &R::alternate_directions, {},
+       "iterations other than a level's first and last use one direction per pair, alternating "
+       "(half the work); false: both directions every iteration"},
+      {"normalize_by_pair_count", &R::normalize_by_pair_count, {},
+       "each vertex's photometric gradient is divided by the number of pair-directions that saw it"},
+      {"min_height_confidence", &R::min_height_confidence, Range::AboveTo(0, 1),
+       "floor of a vertex's height confidence (see height_sigma_gsd); the thin-plate weight is "
+       "divided by it; 1: off"},
+      {"height_sigma_gsd", &R::height_sigma_gsd, Range::AtLeast(0),
+       "> 0: a vertex's height confidence from the images (Fisher information of its pixels under "
+       "the images' noise): 1 where they determine its height to within this many level GSDs "
+       "(1 sigma), (this / sigma)^2 below; 0: from the pairs' geometry"},
+      {"hold_unseen", &R::hold_unseen, {},
+       "vertices no pair-direction sees (occluded, grazing) do not move"},
+      {"hold_boundary_xy", &R::hold_boundary_xy, {},
+       "boundary vertices move vertically only (tile seams)"},
+      {"estimate_bias", &R::estimate_bias, {},
+       "estimate per-image RPC bias shifts over the initial surface before refining (added to "
+       "images[].bias)"},
+      {"min_pair_angle_deg", &P::min_angle_deg, Range::Open(0, 90),
+       "pairs converging less are not used (the height is not constrained)"},
+      {"max_pair_angle_deg", &P::max_angle_deg, Range::Open(0, 90),
+       "pairs converging more are not used; above min_pair_angle_deg"},
+      {"optimal_pair_angle_deg", &P::optimal_angle_deg, Range::Open(0, 90),
+       "angle from which height precision no longer limits a pair; wider pairs score lower for "
+       "occlusion; in [min_pair_angle_deg, max_pair_angle_deg]"},
+      {"min_pair_overlap", &P::min_overlap, Range::In(0, 1),
+       "fraction of the surface both images of a pair must see"},
+      {"pair_partners_per_view", &P::partners_per_view, Range::AtLeast(1),
+       "pairs each view gets where candidates allow"},
+      {"max_pairs_per_image", &P::max_pairs_per_image, Range::AtLeast(1),
+       "cap on the pairs of one image"},
+      {"max_pairs", &P::max_pairs, Range::AtLeast(0), "pairs in all; 0: 1.5 per view, at least 10"},
+      {"min_contrast", &P::min_contrast, Range::AtLeast(0),
+       "images whose normalised standard deviation is below this are not used"},
+  };
+  return table;
+}
+
+const RefineOptionInfo* FindRefineOption(std::string_view name) {
+  return FindOption(RefineOptionTable(), name);
+}
+
+std::string PairOptions::Check() const {
+  RefineOptions options;
+  options.pairs = *this;
+  const std::string problem = CheckOptionRanges(RefineOptionTable(), options, /*nested_only=*/true);
+  return problem.empty() ? CheckPairAngles(*this) : problem;
+}
+
 std::string RefineOptions::Check() const {
-  if (levels < -1 || levels > 6) return "levels must be in [0, 6] or -1 (auto), got " + Num(levels);
-  if (!(max_coarse_edge_m > 0)) return "max_coarse_edge_m must be > 0, got " + Num(max_coarse_edge_m);
-  if (iterations_per_level < 0 || iterations_per_level > 1000)
-    return "iterations_per_level must be in [0, 1000], got " + Num(iterations_per_level);
-  if (!(alpha >= 0)) return "alpha must be >= 0, got " + Num(alpha);
-  if (!(beta >= 0)) return "beta must be >= 0, got " + Num(beta);
-  if (!(step > 0)) return "step must be > 0, got " + Num(step);
-  if (!(max_step_gsd > 0)) return "max_step_gsd must be > 0, got " + Num(max_step_gsd);
-  if (zncc_window_radius < 1 || zncc_window_radius > 7)
-    return "zncc_window_radius must be in [1, 7], got " + Num(zncc_window_radius);
-  if (!(min_window_valid > 0 && min_window_valid <= 1))
-    return "min_window_valid must be in (0, 1], got " + Num(min_window_valid);
-  if (!(variance_floor > 0)) return "variance_floor must be > 0, got " + Num(variance_floor);
-  if (!(noise_variance_factor >= 0))
-    return "noise_variance_factor must be >= 0, got " + Num(noise_variance_factor);
-  if (!(visibility_tolerance_gsd > 0))
-    return "visibility_tolerance_gsd must be > 0, got " + Num(visibility_tolerance_gsd);
-  if (!(min_ray_cos >= 0 && min_ray_cos < 1))
-    return "min_ray_cos must be in [0, 1), got " + Num(min_ray_cos);
-  if (virtual_camera_grid_px < 1)
-    return "virtual_camera_grid_px must be >= 1, got " + Num(virtual_camera_grid_px);
-  if (hit_maps_every < 1 || hit_maps_every > 20)
-    return "hit_maps_every must be in [1, 20], got " + Num(hit_maps_every);
-  if (!(height_sigma_gsd >= 0))
-    return "height_sigma_gsd must be >= 0, got " + Num(height_sigma_gsd);
-  if (!(min_height_confidence > 0 && min_height_confidence <= 1))
-    return "min_height_confidence must be in (0, 1], got " + Num(min_height_confidence);
-  if (!(flat_tolerance_gsd >= 0))
-    return "flat_tolerance_gsd must be >= 0, got " + Num(flat_tolerance_gsd);
-  if (!(coarse_edge_px > 0)) return "coarse_edge_px must be > 0, got " + Num(coarse_edge_px);
-  return pairs.Check();
+  const std::string problem = CheckOptionRanges(RefineOptionTable(), *this);
+  return problem.empty() ? CheckPairAngles(pairs) : problem;
 }
 
 int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cell_m) {

@@ -1,60 +1,65 @@
 #pragma once
 // Options of the refinement (DESIGN.md "The method"). Defaults were tuned on synthetic
-// scenes from `satmesh synth` (see BENCHMARKS.md for the runs that chose them).
+// scenes from `satmesh synth` (see BENCHMARKS.md for the runs that chose them). Each
+// option's wire name, valid range and one-line help: RefineOptionTable() (refine_options.cc);
+// the comments here say what the fields mean and their units.
 #include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/common/option_table.h"
 
 namespace satmesh {
 
 // Stereo pair selection (core/refine/pairs.h): candidates, their score, the selection.
 struct PairOptions {
   double min_angle_deg = 2.0;    // min intersection angle of the viewing directions: below,
-                                 // a pair does not constrain the height, (0, 90)
-  double max_angle_deg = 60.0;   // max intersection angle, (min_angle_deg, 90)
+                                 // a pair does not constrain the height
+  double max_angle_deg = 60.0;   // max intersection angle
   double optimal_angle_deg = 20.0;  // angle from which the height precision no longer limits a
-                                    // pair (B/H 0.35); wider pairs score lower for occlusion,
-                                    // [min_angle_deg, max_angle_deg]
-  double min_overlap = 0.25;     // fraction of the surface both images must see, [0, 1]
-  int partners_per_view = 3;     // pairs each view gets where candidates allow, >= 1
-  int max_pairs_per_image = 6;   // cap on pairs that involve one image, >= 1
-  int max_pairs = 0;             // pairs in all; 0: 1.5 per view, at least 10 (pairs.cc), >= 0
-  double min_contrast = 0.02;    // images whose normalised std is below this are dropped, >= 0
+                                    // pair (B/H 0.35); wider pairs score lower for occlusion
+  double min_overlap = 0.25;     // fraction of the surface both images must see
+  int partners_per_view = 3;     // pairs each view gets where candidates allow
+  int max_pairs_per_image = 6;   // cap on pairs that involve one image
+  int max_pairs = 0;             // pairs in all; 0: 1.5 per view, at least 10 (pairs.cc)
+  double min_contrast = 0.02;    // images whose normalised std is below this are dropped
   std::string Check() const;
 };
 
 struct RefineOptions {
-  int levels = -1;                 // coarsest pyramid level L (images at 1/2^L), [0, 6];
+  int levels = -1;                 // coarsest pyramid level L (images at 1/2^L);
                                    // -1: from the GSD and the initial surface (ResolveLevels)
   double max_coarse_edge_m = 2.0;  // levels -1: the coarse mesh's triangle edge stays under
                                    // max(this, the initial surface's cell), so that a coarse
                                    // start does not smooth away walls and structures of
-                                   // twice this size, > 0
-  int iterations_per_level = 20;   // gradient steps per level, [0, 1000]
-  double alpha = 2.0;              // weight of the photometric term M, >= 0
-  double beta = 0.1;               // weight of the thin-plate term (homogenised by 1/GSD²), >= 0
-  double step = 0.5;               // gradient step, in units of (level GSD)², > 0
-  double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD, > 0
-  int zncc_window_radius = 2;      // ZNCC window (2r+1)², r in [1, 7]
-  double min_window_valid = 0.5;   // min fraction of valid pixels in a ZNCC window, (0, 1]
-  double variance_floor = 1e-4;    // floor of the windows' variances (unit-range images), > 0
+                                   // twice this size
+  int iterations_per_level = 20;   // gradient steps per level
+  double alpha = 2.0;              // weight of the photometric term M
+  double beta = 0.1;               // weight of the thin-plate term (homogenised by 1/GSD²)
+  double step = 0.5;               // gradient step, in units of (level GSD)²
+  double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD
+  int zncc_window_radius = 2;      // ZNCC window (2r+1)²
+  double min_window_valid = 0.5;   // min fraction of valid pixels in a ZNCC window
+  double variance_floor = 1e-4;    // floor of the windows' variances (unit-range images)
   double noise_variance_factor = 4.0;  // the floor is raised to this x the images' noise
                                        // variance at the level (NoiseSigma, Immerkær): windows
                                        // whose texture is not above the noise add little
-                                       // gradient (ZNCC confidence), >= 0; 0: fixed floor
-  double visibility_tolerance_gsd = 2.0;  // depth test tolerance, in level GSD, > 0
+                                       // gradient (ZNCC confidence); 0: fixed floor
+  double visibility_tolerance_gsd = 2.0;  // depth test tolerance, in level GSD
   double min_ray_cos = 0.1;        // |cos| between ray and face normal below which a pixel is
-                                   // ignored (grazing views), [0, 1)
-  int virtual_camera_grid_px = 16; // spacing of exactly localised rays, in level pixels, >= 1
+                                   // ignored (grazing views)
+  int virtual_camera_grid_px = 16; // spacing of exactly localised rays, in level pixels
   bool rasterize_hit_maps = true;  // hit maps by z-buffer rasterization through the RFM
                                    // (hit_map_raster.h); false: Embree ray casting
   int hit_maps_every = 2;          // hit maps made anew every N iterations and at a level's
                                    // first and last; in between each pixel keeps its face
-                                   // and its point follows the face (FollowHitMaps), [1, 20]
-  double coarse_edge_px = 2.0;     // edge length of the coarse mesh at level L, in level px, > 0
+                                   // and its point follows the face (FollowHitMaps)
+  double coarse_edge_px = 2.0;     // edge length of the coarse mesh at level L, in level px
   double flat_tolerance_gsd = 1.0;  // between levels only faces near a vertex off the plane
                                    // of its neighbours by more than this (GSD of the level
                                    // just finished) are subdivided; planar parts keep the
                                    // coarser triangles (mesh_resolution.h; BENCHMARKS.md,
-                                   // session 12); 0: all faces (the paper), >= 0
+                                   // session 12); 0: all faces (the paper)
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous
@@ -70,7 +75,7 @@ struct RefineOptions {
                                         // number of pair-directions that saw it (OpenMVS)
   double min_height_confidence = 0.1;  // floor of a vertex's height confidence (see
                                        // height_sigma_gsd); the thin-plate weight is
-                                       // divided by it. 1: off (uniform beta), (0, 1]
+                                       // divided by it. 1: off (uniform beta)
   double height_sigma_gsd = 0.05;  // > 0: a vertex's height confidence comes from the
                                    // images (Fisher information of the pixels that see
                                    // it under the images' noise, refine.cc,
@@ -78,7 +83,7 @@ struct RefineOptions {
                                    // determine its height to within this, in level GSD
                                    // (1 sigma), falling as (this / sigma)² to
                                    // min_height_confidence; 0: from the pairs' geometry
-                                   // only (HeightConfidence), >= 0
+                                   // only (HeightConfidence)
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing
@@ -90,6 +95,16 @@ struct RefineOptions {
 
   std::string Check() const;
 };
+
+// Each refinement option declared once (core/common/option_table.h): wire name (the job's
+// "options" in proto/job.schema.json, `--set name=value`, every message of Check()), field,
+// range, one-line help. The options of `pairs` are written flat on the wire.
+using RefineOptionInfo = OptionInfo<RefineOptions, PairOptions, &RefineOptions::pairs>;
+
+// Every refinement option, in the schema's order.
+const std::vector<RefineOptionInfo>& RefineOptionTable();
+// nullptr for a name not in the table.
+const RefineOptionInfo* FindRefineOption(std::string_view name);
 
 // The coarsest level: options.levels, or for -1 the largest L in [0, 3] whose coarse
 // triangle edge (coarse_edge_px x gsd_m x 2^L) is at most max(max_coarse_edge_m,

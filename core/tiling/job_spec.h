@@ -21,16 +21,21 @@ struct JobAoi {
   std::string crs;                       // "" = the planning CRS (initial DSM's or mesh's)
 };
 
+// The job's "tiling"; wire names, ranges and help: TilingOptionTable() (tile_plan.cc).
 struct TilingOptions {
   double tile_size_m = 0;   // edge of the square tile cores, DSM CRS units (m); 0 = one tile
-  double overlap_m = 24;    // refined beyond each core edge, then trimmed, m, >= 0
-  int workers = 1;          // tiles refined at once in-process, [1, 256]
-  double memory_budget_mb = 0;  // one worker's peak, MB (2^20 bytes), >= 0; 0: a quarter of
+  double overlap_m = 24;    // refined beyond each core edge, then trimmed, m
+  int workers = 1;          // tiles refined at once in-process
+  double memory_budget_mb = 0;  // one worker's peak, MB (2^20 bytes); 0: a quarter of
                                 // the machine's memory / workers (memory_budget.h). With
                                 // tile_size_m = 0 the AOI is cut into tiles that fit it; a
                                 // tile that cannot fit is refused, naming budget and need
-  std::string Check() const;
+  std::string Check() const;  // messages name tiling.<wire name>
 };
+
+using TilingOptionInfo = OptionInfo<TilingOptions>;
+// Every tiling option, in the schema's order (core/common/option_table.h).
+const std::vector<TilingOptionInfo>& TilingOptionTable();
 
 // The initial surface's mesh (core/tiling/initial_mesh.h reads and checks it).
 struct JobInitialMesh {

@@ -233,16 +233,26 @@ void CutTiles(const JobSpec& spec, const std::vector<ImageFootprintModel>& image
 
 }  // namespace
 
+const std::vector<TilingOptionInfo>& TilingOptionTable() {
+  using Range = OptionRange;
+  using T = TilingOptions;
+  static const std::vector<TilingOptionInfo> table = {
+      {"size_m", &T::tile_size_m, Range::AtLeast(0),
+       "tile core edge in DSM CRS units (m); 0: one tile over the AOI (or tiles that fit "
+       "memory_budget_mb)"},
+      {"overlap_m", &T::overlap_m, Range::AtLeast(0),
+       "refined beyond each core edge and trimmed, m"},
+      {"workers", &T::workers, Range::In(1, 256), "tiles refined at once in-process"},
+      {"memory_budget_mb", &T::memory_budget_mb, Range::AtLeast(0),
+       "one worker's peak memory, MB; 0: a quarter of the machine's memory / workers. With size_m 0 "
+       "the AOI is tiled to fit it; a tile that cannot fit is refused"},
+  };
+  return table;
+}
+
 std::string TilingOptions::Check() const {
-  if (!(tile_size_m >= 0) || !std::isfinite(tile_size_m))
-    return "tiling.size_m must be >= 0 (0 = one tile), got " + std::to_string(tile_size_m);
-  if (!(overlap_m >= 0) || !std::isfinite(overlap_m))
-    return "tiling.overlap_m must be >= 0, got " + std::to_string(overlap_m);
-  if (workers < 1 || workers > 256) return "tiling.workers must be in [1, 256], got " + std::to_string(workers);
-  if (!(memory_budget_mb >= 0) || !std::isfinite(memory_budget_mb))
-    return "tiling.memory_budget_mb must be >= 0 (0 = from the machine's memory), got " +
-           std::to_string(memory_budget_mb);
-  return "";
+  const std::string problem = CheckOptionRanges(TilingOptionTable(), *this);
+  return problem.empty() ? "" : "tiling." + problem;
 }
 
 Box2d DsmGrid::BoxOf(const PixelWindow& c) const {

@@ -5,6 +5,7 @@
 
 #include "core/mesh/mesh_io.h"
 #include "core/tiling/memory_budget.h"
+#include "proto/job_spec_json.h"
 #include "tests/server/test_server.h"
 
 namespace satmesh::server::testing {
@@ -21,6 +22,10 @@ TEST(Api, LandingConformanceAndProcessDescription) {
   EXPECT_EQ(Json(c.Get("/processes"))["processes"][0]["id"], "refine-mesh");
   const json d = Json(c.Get("/processes/refine-mesh"));
   EXPECT_TRUE(d["inputs"]["job"]["schema"]["properties"].contains("images"));
+  // The refinement and tiling options as declared once (RefineOptionTable,
+  // TilingOptionTable): type, default, range, help.
+  EXPECT_EQ(d["inputs"]["job"]["schema"]["properties"]["options"]["properties"], proto::RefineOptionsSchema());
+  EXPECT_EQ(d["inputs"]["job"]["schema"]["properties"]["tiling"]["properties"], proto::TilingOptionsSchema());
   EXPECT_EQ(Json(c.Get("/api"))["openapi"], "3.0.3");
   EXPECT_EQ(Json(c.Get("/health"))["status"], "ok");
   // Links are absolute, from the request's Host (OWSLib follows them as they are).

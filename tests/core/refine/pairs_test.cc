@@ -51,13 +51,13 @@ TEST(PairOptions, DefaultsAreValid) { EXPECT_EQ(PairOptions().Check(), ""); }
 TEST(PairOptions, InvalidValuesAreNamed) {
   PairOptions o;
   o.optimal_angle_deg = 80;
-  EXPECT_NE(o.Check().find("pairs.optimal_angle_deg"), std::string::npos);
+  EXPECT_NE(o.Check().find("optimal_pair_angle_deg"), std::string::npos);
   o = PairOptions();
   o.min_overlap = 1.5;
-  EXPECT_NE(o.Check().find("pairs.min_overlap"), std::string::npos);
+  EXPECT_NE(o.Check().find("min_pair_overlap must be in [0, 1], got 1.5"), std::string::npos);
   o = PairOptions();
   o.partners_per_view = 0;
-  EXPECT_NE(o.Check().find("pairs.partners_per_view"), std::string::npos);
+  EXPECT_NE(o.Check().find("pair_partners_per_view must be >= 1, got 0"), std::string::npos);
 }
 
 TEST(SelectPairs, WideStereoPairIsRefined) {

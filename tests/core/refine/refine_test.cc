@@ -69,7 +69,7 @@ TEST(RefineOptions, InvalidValuesAreNamed) {
   EXPECT_NE(o.Check().find("zncc_window_radius"), std::string::npos);
   o = RefineOptions();
   o.pairs.max_angle_deg = 2;
-  EXPECT_NE(o.Check().find("pairs.max_angle_deg"), std::string::npos);
+  EXPECT_NE(o.Check().find("max_pair_angle_deg must be > min_pair_angle_deg"), std::string::npos);
   o = RefineOptions();
   o.step = -1;
   EXPECT_NE(o.Check().find("step"), std::string::npos);

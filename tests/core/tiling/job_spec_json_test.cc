@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "core/common/error.h"
 #include "proto/job_spec_json.h"
 
@@ -73,7 +75,7 @@ TEST(JobSpecFromJson, ReadsHowOftenHitMapsAreMadeAnew) {
   job["options"]["hit_maps_every"] = 1;
   EXPECT_EQ(proto::JobSpecFromJson(job, "/base").refine.hit_maps_every, 1);
   job["options"]["hit_maps_every"] = 21;
-  EXPECT_NE(ErrorOf(job).find("hit_maps_every must be in [1, 20]"), std::string::npos)
+  EXPECT_NE(ErrorOf(job).find("options.hit_maps_every must be in [1, 20], got 21"), std::string::npos)
       << ErrorOf(job);
 }
 
@@ -103,7 +105,7 @@ TEST(JobSpecFromJson, ReadsThePairSelectionAndConfidenceOptions) {
   EXPECT_EQ(o.levels, -1);
   EXPECT_EQ(o.max_coarse_edge_m, 3);
   job["options"]["optimal_pair_angle_deg"] = 50;  // above max_pair_angle_deg
-  EXPECT_NE(ErrorOf(job).find("pairs.optimal_angle_deg"), std::string::npos) << ErrorOf(job);
+  EXPECT_NE(ErrorOf(job).find("options.optimal_pair_angle_deg must be in [min_pair_angle_deg, max_pair_angle_deg]"), std::string::npos) << ErrorOf(job);
   job["options"]["optimal_pair_angle_deg"] = 15;
   job["options"]["min_height_confidence"] = 0;
   EXPECT_NE(ErrorOf(job).find("min_height_confidence"), std::string::npos) << ErrorOf(job);
@@ -154,6 +156,97 @@ TEST(JobSpecFromJson, BadTilingFieldsAreNamed) {
   EXPECT_NE(ErrorOf(job).find("exactly one"), std::string::npos) << ErrorOf(job);
   job["aoi"] = {{"polygon", {{0, 0}, {5, 0}}}};
   EXPECT_NE(ErrorOf(job).find("aoi.polygon"), std::string::npos) << ErrorOf(job);
+}
+
+// A value of the option other than its default that Check() accepts.
+json NonDefaultValue(const RefineOptionInfo& option) {
+  const OptionValue d = option.Default();
+  if (const bool* b = std::get_if<bool>(&d)) return !*b;
+  const double x = std::holds_alternative<int>(d) ? std::get<int>(d) : std::get<double>(d);
+  for (const double v : {x + 1, x - 1, x / 2, x * 1.5}) {
+    RefineOptions o;
+    option.Set(&o, option.type() == OptionType::kInt ? OptionValue(int(v)) : OptionValue(v));
+    if (o.Check().empty() && option.Get(o) != d)
+      return option.type() == OptionType::kInt ? json(int(v)) : json(v);
+  }
+  ADD_FAILURE() << option.name << ": no valid value other than the default tried";
+  return nullptr;
+}
+
+TEST(JobSpecFromJson, EveryRefinementOptionRoundTrips) {
+  for (const RefineOptionInfo& option : RefineOptionTable()) {
+    json job = MinimalJob();
+    job["options"][std::string(option.name)] = NonDefaultValue(option);
+    const RefineOptions read = proto::JobSpecFromJson(job, "/base").refine;
+    EXPECT_EQ(json(std::visit([](auto v) { return json(v); }, option.Get(read))),
+              job["options"][std::string(option.name)])
+        << option.name;
+    EXPECT_NE(option.Get(read), option.Default()) << option.name;
+  }
+}
+
+TEST(JobSpecFromJson, OutOfRangeOptionsAreNamedWithTheirRange) {
+  for (const RefineOptionInfo& option : RefineOptionTable()) {
+    const std::string path = "options." + std::string(option.name);
+    json job = MinimalJob();
+    const OptionRange& r = option.range;
+    const bool integer = option.type() == OptionType::kInt;
+    for (const double v : {r.min ? *r.min - 1 : NAN, r.max ? *r.max + 1 : NAN}) {
+      if (std::isnan(v)) continue;
+      job["options"][std::string(option.name)] = integer ? json(int(v)) : json(v);
+      const std::string error = ErrorOf(job);
+      EXPECT_EQ(error.find(path + " must be "), 0u) << error;
+      EXPECT_NE(error.find(option.RangeText()), std::string::npos) << error;
+    }
+    // The wrong JSON type.
+    job["options"][std::string(option.name)] = option.type() == OptionType::kBool ? json(1) : json("2");
+    EXPECT_EQ(ErrorOf(job).find(path + ": expected "), 0u) << ErrorOf(job);
+  }
+  json job = MinimalJob();
+  job["options"]["pairs.min_angle_deg"] = 3;  // a struct path is not a wire name
+  EXPECT_EQ(ErrorOf(job), "options.pairs.min_angle_deg: unknown option");
+}
+
+// The schema file's `section` properties are the table's (proto::*OptionsSchema()).
+void ExpectSchemaSectionIs(const std::string& section, const json& expected) {
+  std::ifstream in(std::string(SATMESH_PROTO_DIR) + "/job.schema.json");
+  const json properties = json::parse(in)["properties"][section]["properties"];
+  for (const auto& [name, schema] : expected.items())
+    EXPECT_EQ(properties.value(name, json()), schema)
+        << "job.schema.json " << section << "." << name << " should read\n\"" << name << "\": " << schema.dump();
+  for (const auto& [name, schema] : properties.items())
+    EXPECT_TRUE(expected.contains(name)) << "job.schema.json " << section << "." << name << " is not in the table";
+}
+
+TEST(JobSchema, OptionsAndTilingAreTheTables) {
+  ExpectSchemaSectionIs("options", proto::RefineOptionsSchema());
+  ExpectSchemaSectionIs("tiling", proto::TilingOptionsSchema());
+}
+
+TEST(JobSpecFromJson, OutOfRangeTilingIsNamedWithItsRange) {
+  for (const TilingOptionInfo& option : TilingOptionTable()) {
+    json job = MinimalJob();
+    job["tiling"][std::string(option.name)] = -1;
+    const std::string error = ErrorOf(job);
+    EXPECT_EQ(error.find("tiling." + std::string(option.name) + " must be "), 0u) << error;
+    EXPECT_NE(error.find(option.RangeText() + ", got -1"), std::string::npos) << error;
+  }
+}
+
+TEST(ApplyOptionOverride, RefinementOptionsAreTheTables) {
+  json job = MinimalJob();
+  proto::ApplyOptionOverride(&job, "options.min_pair_angle_deg=3");
+  proto::ApplyOptionOverride(&job, "hold_unseen=false");
+  EXPECT_EQ(job["options"]["min_pair_angle_deg"], 3);
+  EXPECT_EQ(job["options"]["hold_unseen"], false);
+  EXPECT_THROW(proto::ApplyOptionOverride(&job, "tiling.size=3"), Error);
+  try {
+    proto::ApplyOptionOverride(&job, "min_angle_deg=3");
+    ADD_FAILURE() << "an unknown option was set";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--set min_angle_deg: unknown option"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("min_pair_angle_deg"), std::string::npos) << e.what();
+  }
 }
 
 TEST(ApplyOptionOverride, DottedKeysSetTopLevelObjects) {

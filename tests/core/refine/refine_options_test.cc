@@ -1,0 +1,124 @@
+// The refinement options' table (RefineOptionTable): one declaration per option, from
+// which Check() and the wire format are made.
+#include "core/refine/refine_options.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <regex>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace satmesh {
+namespace {
+
+std::set<std::string> WireNames() {
+  std::set<std::string> names;
+  for (const RefineOptionInfo& option : RefineOptionTable()) names.insert(std::string(option.name));
+  return names;
+}
+
+// Values of the option just outside its range (none for a boolean or an unbounded side).
+std::vector<double> OutOfRange(const RefineOptionInfo& option) {
+  std::vector<double> values;
+  const OptionRange& r = option.range;
+  if (r.min) values.push_back(r.min_exclusive ? *r.min : *r.min - 1);
+  if (r.max) values.push_back(r.max_exclusive ? *r.max : *r.max + 1);
+  return values;
+}
+
+OptionValue As(const RefineOptionInfo& option, double v) {
+  if (option.type() == OptionType::kInt) return int(v);
+  return v;
+}
+
+// Every snake_case word of a message is a wire name: no struct path ("pairs.min_angle_deg").
+void ExpectOnlyWireNames(const std::string& message) {
+  const std::set<std::string> names = WireNames();
+  EXPECT_EQ(message.find("pairs."), std::string::npos) << message;
+  const std::regex word("[a-z0-9]+(_[a-z0-9]+)+");
+  for (auto it = std::sregex_iterator(message.begin(), message.end(), word);
+       it != std::sregex_iterator(); ++it)
+    EXPECT_TRUE(names.count(it->str())) << "'" << it->str() << "' in: " << message;
+}
+
+TEST(RefineOptionTable, NamesAreUniqueAndEachOptionSetsItsOwnField) {
+  EXPECT_EQ(WireNames().size(), RefineOptionTable().size());
+  for (const RefineOptionInfo& option : RefineOptionTable()) {
+    EXPECT_FALSE(option.help.empty()) << option.name;
+    EXPECT_EQ(option.help.find('\n'), std::string_view::npos) << option.name;
+    RefineOptions changed;
+    const OptionValue before = option.Get(changed);
+    const OptionValue after =
+        std::holds_alternative<bool>(before)  ? OptionValue(!std::get<bool>(before))
+        : std::holds_alternative<int>(before) ? OptionValue(std::get<int>(before) + 7)
+                                              : OptionValue(std::get<double>(before) + 7.5);
+    option.Set(&changed, after);
+    EXPECT_EQ(option.Get(changed), after) << option.name;
+    for (const RefineOptionInfo& other : RefineOptionTable())
+      if (&other != &option) {
+        EXPECT_EQ(other.Get(changed), other.Default()) << option.name << " set " << other.name;
+      }
+  }
+}
+
+TEST(RefineOptionTable, DefaultsAreTheStructsAndInRange) {
+  const RefineOptions defaults;
+  EXPECT_EQ(FindRefineOption("levels")->Default(), OptionValue(defaults.levels));
+  EXPECT_EQ(FindRefineOption("min_pair_angle_deg")->Default(),
+            OptionValue(defaults.pairs.min_angle_deg));
+  EXPECT_EQ(FindRefineOption("max_pairs")->type(), OptionType::kInt);
+  EXPECT_EQ(FindRefineOption("hold_unseen")->type(), OptionType::kBool);
+  EXPECT_EQ(FindRefineOption("pairs.min_angle_deg"), nullptr);
+  for (const RefineOptionInfo& option : RefineOptionTable())
+    EXPECT_EQ(option.CheckValue(defaults), "") << option.name;
+}
+
+TEST(RefineOptionTable, RangesAreWritten) {
+  EXPECT_EQ(FindRefineOption("hit_maps_every")->RangeText(), "[1, 20]");
+  EXPECT_EQ(FindRefineOption("min_window_valid")->RangeText(), "(0, 1]");
+  EXPECT_EQ(FindRefineOption("min_ray_cos")->RangeText(), "[0, 1)");
+  EXPECT_EQ(FindRefineOption("step")->RangeText(), "> 0");
+  EXPECT_EQ(FindRefineOption("alpha")->RangeText(), ">= 0");
+  EXPECT_EQ(FindRefineOption("estimate_bias")->RangeText(), "");
+}
+
+TEST(RefineOptions, EveryOutOfRangeValueIsNamedByItsWireNameWithTheRange) {
+  for (const RefineOptionInfo& option : RefineOptionTable()) {
+    for (const double v : OutOfRange(option)) {
+      RefineOptions o;
+      option.Set(&o, As(option, v));
+      const std::string message = o.Check();
+      EXPECT_EQ(message.rfind(std::string(option.name) + " must be ", 0), 0u) << message;
+      EXPECT_NE(message.find(option.RangeText()), std::string::npos) << message;
+      ExpectOnlyWireNames(message);
+      if (option.is_nested()) {
+        EXPECT_EQ(o.pairs.Check(), message);
+      }
+    }
+  }
+}
+
+TEST(RefineOptions, CrossFieldChecksUseWireNames) {
+  RefineOptions o;
+  o.pairs.max_angle_deg = 1;  // under min_pair_angle_deg 2; in (0, 90)
+  EXPECT_EQ(o.Check(), "max_pair_angle_deg must be > min_pair_angle_deg (2), got 1");
+  ExpectOnlyWireNames(o.Check());
+  o = RefineOptions();
+  o.pairs.optimal_angle_deg = 70;
+  EXPECT_EQ(o.Check(),
+            "optimal_pair_angle_deg must be in [min_pair_angle_deg, max_pair_angle_deg] = [2, 60], "
+            "got 70");
+  ExpectOnlyWireNames(o.Check());
+  EXPECT_EQ(o.pairs.Check(), o.Check());
+}
+
+TEST(RefineOptions, NanIsOutOfRange) {
+  RefineOptions o;
+  o.alpha = std::nan("");
+  EXPECT_EQ(o.Check().rfind("alpha must be >= 0", 0), 0u) << o.Check();
+}
+
+}  // namespace
+}  // namespace satmesh
