@@ -27,8 +27,9 @@ TEST(VertexBendingM, ZeroOnAPlaneWhateverTheTrianglesIsTheStepAtAnEdge) {
   plane = SubdivideMarked(plane, marked);
   const VertexAdjacency adj = BuildVertexAdjacency(plane);
   const std::vector<float> bending = VertexBendingM(plane, adj);
-  for (size_t v = 0; v < plane.num_vertices(); ++v)
+  for (size_t v = 0; v < plane.num_vertices(); ++v) {
     if (!adj.is_boundary[v]) EXPECT_NEAR(bending[v], 0.f, 1e-5f) << v;
+  }
   // The block's top corner (24, 24, 3): neighbours are lower on two sides, so it bends
   // by a sizeable fraction of the 3 m step; a vertex in the roof's middle does not.
   const TriangleMesh block = BlockOnPlane();
