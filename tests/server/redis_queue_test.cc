@@ -300,8 +300,9 @@ TEST_F(RedisQueue, AKilledWorkersTileIsReclaimedAndTheJobCompletes) {
   const json metrics = Json(c.Get(("/jobs/" + id + "/results").c_str()))["metrics"]["value"];
   ExpectEveryTileOnce(tiles, metrics, 4);
   for (const auto& t : tiles) {
-    if (std::to_string(t["x"].get<int>()) + "_" + std::to_string(t["y"].get<int>()) == running)
+    if (std::to_string(t["x"].get<int>()) + "_" + std::to_string(t["y"].get<int>()) == running) {
       EXPECT_GE(t["attempts"].get<int>(), 2) << "the killed worker's tile was not delivered again: " << t.dump();
+    }
   }
   // Exactly once: each tile's result recorded once (the stream's entries all acknowledged).
   // (The last worker acknowledges its entry just after ending the job.)
