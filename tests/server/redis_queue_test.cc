@@ -274,7 +274,9 @@ TEST_F(RedisQueue, MultiTileJobMatchesTheSingleProcessRun) {
 }
 
 TEST_F(RedisQueue, AKilledWorkersTileIsReclaimedAndTheJobCompletes) {
-  const json job = MakeJob(/*iterations=*/6);
+  // Tiles long enough (~2 s) that the kill lands while the tile runs: with 6 iterations a
+  // tile took 0.25 s and CI once saw it finish before the kill (attempts 1).
+  const json job = MakeJob(/*iterations=*/50);
   const Process& api = StartApi();
   Process& first = StartWorker(/*idle_timeout_s=*/2);
   const std::string id = Submit(api, job);
@@ -288,7 +290,6 @@ TEST_F(RedisQueue, AKilledWorkersTileIsReclaimedAndTheJobCompletes) {
     if (running.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   ASSERT_FALSE(running.empty()) << "no tile started";
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
   first.Kill(SIGKILL);
   const auto killed = Clock::now();
   StartWorker(/*idle_timeout_s=*/2);
