@@ -101,40 +101,6 @@ std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh) {
   return normals;
 }
 
-TriangleMesh Subdivide1To4(const TriangleMesh& mesh) {
-  const size_t num_faces = mesh.faces.size();
-  // Sort the 3F corner edges by key; each run of equal keys is one new midpoint.
-  std::vector<std::pair<uint64_t, uint32_t>> corner_edges(3 * num_faces);
-  for (size_t f = 0; f < num_faces; ++f)
-    for (int k = 0; k < 3; ++k)
-      corner_edges[3 * f + k] = {EdgeKey(mesh.faces[f][k], mesh.faces[f][(k + 1) % 3]),
-                                 uint32_t(3 * f + k)};
-  std::sort(corner_edges.begin(), corner_edges.end());
-  TriangleMesh out;
-  out.origin = mesh.origin;
-  out.crs = mesh.crs;
-  out.vertices = mesh.vertices;
-  std::vector<int> midpoint(3 * num_faces);  // corner k's edge (k -> k+1) midpoint
-  for (size_t i = 0; i < corner_edges.size(); ++i) {
-    if (i == 0 || corner_edges[i].first != corner_edges[i - 1].first) {
-      const int a = int(corner_edges[i].first >> 32);
-      const int b = int(corner_edges[i].first & 0xffffffffu);
-      out.vertices.push_back(0.5f * (mesh.vertices[a] + mesh.vertices[b]));
-    }
-    midpoint[corner_edges[i].second] = int(out.vertices.size()) - 1;
-  }
-  out.faces.resize(4 * num_faces);
-  for (size_t f = 0; f < num_faces; ++f) {
-    const auto& v = mesh.faces[f];
-    const int m01 = midpoint[3 * f], m12 = midpoint[3 * f + 1], m20 = midpoint[3 * f + 2];
-    out.faces[4 * f + 0] = {v[0], m01, m20};
-    out.faces[4 * f + 1] = {m01, v[1], m12};
-    out.faces[4 * f + 2] = {m20, m12, v[2]};
-    out.faces[4 * f + 3] = {m01, m12, m20};
-  }
-  return out;
-}
-
 TriangleMesh SubdivideMarked(const TriangleMesh& mesh, const std::vector<char>& marked) {
   const size_t num_faces = mesh.faces.size();
   // Corner k of face f stands for its edge k -> k+1; edge_of[3f+k] numbers unique edges.
@@ -198,6 +164,10 @@ TriangleMesh SubdivideMarked(const TriangleMesh& mesh, const std::vector<char>& 
     }
   }
   return out;
+}
+
+TriangleMesh Subdivide1To4(const TriangleMesh& mesh) {
+  return SubdivideMarked(mesh, std::vector<char>(mesh.num_faces(), 1));
 }
 
 std::vector<Eigen::Vector2i> UniqueEdges(const TriangleMesh& mesh) {
