@@ -9,6 +9,7 @@
 #include "core/dsm/dsm.h"
 #include "core/mesh/mesh_io.h"
 #include "core/synth/scene_writer.h"
+#include "tests/tiny_scene.h"
 #include "core/tiling/job.h"
 #include "proto/job_spec_json.h"
 #include "server/api_documents.h"
@@ -33,13 +34,7 @@ json WaitForEnd(httplib::Client& c, const std::string& id) {
 TEST(MeshJobOverHttp, EqualsTheCliRunChainsAndRefusesBadMeshes) {
   const std::string dir = TempDir("mesh_e2e");
   const std::string scene = dir + "/scene";
-  synth::SynthOptions o = synth::SynthPreset("small", 3);
-  o.city.aoi_size_m = 36;
-  o.city.ground_margin_m = 45;
-  o.city.building_margin_m = 5;
-  o.city.street_pitch_m = 40;
-  o.render.supersample = 1;
-  o.write_preview = false;
+  const synth::SynthOptions o = satmesh::testing::TinySceneOptions();
   synth::GenerateScene(scene, o);
   const Dsm initial = ReadDsm(scene + "/initial/dsm.tif");
   const double x0 = initial.geo_transform[0], y1 = initial.geo_transform[3];

@@ -22,6 +22,7 @@
 
 #include "core/mesh/mesh_io.h"
 #include "core/synth/scene_writer.h"
+#include "tests/tiny_scene.h"
 #include "core/tiling/job.h"
 #include "proto/job_spec_json.h"
 #include "server/api_documents.h"
@@ -141,13 +142,7 @@ class RedisQueue : public ::testing::Test {
   // The scene: 36 m AOI, 2 x 2 tiles of 18 m, one coarse level (as tests/core/tiling).
   json MakeJob(int iterations, double aoi_size_m = 36, bool estimate_bias = false) {
     scene_ = dir_ + "/scene";
-    synth::SynthOptions o = synth::SynthPreset("small", /*seed=*/3);
-    o.city.aoi_size_m = aoi_size_m;
-    o.city.ground_margin_m = 45;
-    o.city.building_margin_m = 5;
-    o.city.street_pitch_m = 40;
-    o.render.supersample = 1;
-    o.write_preview = false;
+    const synth::SynthOptions o = satmesh::testing::TinySceneOptions(aoi_size_m);
     synth::GenerateScene(scene_, o);
     json job = ReadJsonFile(scene_ + "/job.json");
     job["options"]["levels"] = 1;

@@ -17,6 +17,7 @@
 #include "core/tiling/memory_budget.h"
 #include "proto/job_spec_json.h"
 #include "tests/scratch_dir.h"
+#include "tests/tiny_scene.h"
 
 namespace satmesh {
 namespace {
@@ -26,14 +27,7 @@ namespace fs = std::filesystem;
 class TiledJob : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    synth::SynthOptions o = synth::SynthPreset("small", 3);
-    o.city.aoi_size_m = 36;
-    o.city.ground_margin_m = 45;
-    o.city.building_margin_m = 5;
-    o.city.street_pitch_m = 40;
-    // The small preset's tri-stereo (3 views of one pass).
-    o.render.supersample = 1;
-    o.write_preview = false;
+    const synth::SynthOptions o = testing::TinySceneOptions();
     // Per process: ctest runs each test of this suite as its own process, in parallel.
     scene_ = (fs::temp_directory_path() / ("tiling_tiny_scene_" + std::to_string(::getpid()))).string();
     fs::remove_all(scene_);

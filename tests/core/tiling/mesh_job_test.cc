@@ -20,6 +20,7 @@
 #include "core/tiling/tile_input.h"
 #include "proto/job_spec_json.h"
 #include "tests/scratch_dir.h"
+#include "tests/tiny_scene.h"
 
 namespace satmesh {
 namespace {
@@ -29,13 +30,7 @@ namespace fs = std::filesystem;
 class MeshJob : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    synth::SynthOptions o = synth::SynthPreset("small", 3);
-    o.city.aoi_size_m = 36;
-    o.city.ground_margin_m = 45;
-    o.city.building_margin_m = 5;
-    o.city.street_pitch_m = 40;
-    o.render.supersample = 1;
-    o.write_preview = false;
+    const synth::SynthOptions o = testing::TinySceneOptions();
     scene_ = (fs::temp_directory_path() / ("mesh_job_scene_" + std::to_string(::getpid()))).string();
     fs::remove_all(scene_);
     synth::GenerateScene(scene_, o);
