@@ -7,9 +7,12 @@
 #
 #   scripts/build-image.sh [--tag localhost/satmesh:latest] [--base localhost/debian:12-slim]
 #                          [--jobs 2] [--git REV] [--mirror URL] [--rebuild-base] [--ccache DIR]
+#                          [--redis-tag localhost/satmesh-redis:latest]
 # --git REV builds the committed tree REV (git archive) instead of the working tree.
 # --ccache DIR mounts the compiler cache DIR into the compile step (reuses a host build's
 # objects: CI passes the cache its `scripts/build.sh` filled).
+# Also builds --redis-tag from docker/redis.Dockerfile (Debian's redis-server on the same
+# base; the Redis of docker/compose-redis.yaml); "" skips it.
 # Exit status: 0 built; 2 usage; 3 this machine cannot build images at all (not root, host
 # tools not installable, no working container storage), named on stderr; else the build failed.
 set -euo pipefail
@@ -22,8 +25,9 @@ mirror=""                        # Debian mirror for debootstrap; default: the h
 rebuild_base=0                   # 1: remake the base image even if present
 git_rev=""                       # build context: "" = working tree, else this commit
 ccache_dir=""                    # host compiler cache mounted at /ccache; "" = none
+redis_tag="localhost/satmesh-redis:latest"  # Redis image for compose-redis.yaml; "" = none
 
-usage() { sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --tag) tag="$2"; shift 2 ;;
@@ -33,6 +37,7 @@ while [ $# -gt 0 ]; do
     --git) git_rev="$2"; shift 2 ;;
     --rebuild-base) rebuild_base=1; shift ;;
     --ccache) ccache_dir="$2"; shift 2 ;;
+    --redis-tag) redis_tag="$2"; shift 2 ;;
     -h|--help) usage ;;
     *) echo "build-image: unknown argument '$1'" >&2; usage ;;
   esac
@@ -161,3 +166,9 @@ nice -n 10 buildah bud --isolation chroot --layers --pull=never --format docker 
   --build-arg DEBIAN_IMAGE="$base" --build-arg BUILD_JOBS="$jobs" \
   -f docker/Dockerfile -t "$tag" .
 buildah images --format '{{.Name}}:{{.Tag}} {{.Size}}' "$tag"
+if [ -n "$redis_tag" ]; then
+  echo "build-image: building $redis_tag (docker/redis.Dockerfile)"
+  nice -n 10 buildah bud --isolation chroot --layers --pull=never --format docker \
+    --build-arg DEBIAN_IMAGE="$base" -f docker/redis.Dockerfile -t "$redis_tag" docker/
+  buildah images --format '{{.Name}}:{{.Tag}} {{.Size}}' "$redis_tag"
+fi
