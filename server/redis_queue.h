@@ -24,7 +24,6 @@
 // was left) or runs the tile again; after max_deliveries the tile is failed with the
 // reason (dead letter) and the job's other tiles go on. The job's status moves to its
 // end once, by a script (atomic in Redis), so it is assembled once.
-#include <atomic>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -67,17 +66,5 @@ class RedisJobQueue : public JobQueue {
   mutable std::mutex mu_;  // one connection, one command at a time
   std::unique_ptr<RedisConnection> redis_;
 };
-
-struct RedisWorkerOptions {
-  RedisQueueOptions queue;
-  std::string data_dir;   // the shared data directory (the API nodes' --data-dir)
-  int threads = 1;        // tiles refined at once, [1, 256]
-  std::string name;       // consumer name prefix; "" = host-pid
-  std::string Check() const;
-};
-
-// Runs a worker until `stop` turns true: `threads` consumers claim tiles, refine them with
-// `executor` and record them as above. Returns the process exit code.
-int RunRedisWorker(const RedisWorkerOptions& options, JobExecutor* executor, const std::atomic<bool>& stop);
 
 }  // namespace satmesh::server

@@ -1,4 +1,4 @@
-// satmesh-worker: refines the tiles of the Redis queue's jobs (server/redis_queue.h) into
+// satmesh-worker: refines the tiles of the Redis queue's jobs (server/redis_worker.h, server/redis_queue.h) into
 // the shared data directory. Same engine as satmesh-server's embedded workers.
 #include <spdlog/spdlog.h>
 
@@ -12,7 +12,7 @@
 
 #include "core/common/error.h"
 #include "server/real_executor.h"
-#include "server/redis_queue.h"
+#include "server/redis_worker.h"
 
 namespace {
 
