@@ -6,6 +6,7 @@
 //
 // Keys (PREFIX = RedisQueueOptions::prefix):
 //   PREFIX:tiles                 stream, one entry per tile to run {job, tile}; group "workers"
+//                                (acknowledged entries are trimmed: it holds queued and running tiles)
 //   PREFIX:jobs                  sorted set of job ids by creation time (ms)
 //   PREFIX:job:ID                hash: request, status, created, started, finished, updated,
 //                                message, idempotency_key, pixels, tiles (JSON [[x, y], ...]),

@@ -47,6 +47,30 @@ redis.call('HSET', KEYS[1], 'status', ARGV[1], 'message', ARGV[2], 'finished', A
            'updated', ARGV[3], 'assembled', ARGV[4])
 return 1)";
 
+// Acknowledges an entry and trims the stream: entries below the oldest pending one (or, with
+// none pending, up to the group's last delivered one) are acknowledged and go (XTRIM
+// MINID), so the stream holds only queued and running tiles. XTRIM, not XDEL: trimming
+// leaves no tombstones, so the group's lag (the API nodes' queue depth) stays defined.
+// Returns the stream's length after.
+constexpr const char* kAckScript = R"(
+redis.call('XACK', KEYS[1], ARGV[1], ARGV[2])
+local pending = redis.call('XPENDING', KEYS[1], ARGV[1])
+local min_id
+if pending[1] > 0 then
+  min_id = pending[2]
+else
+  for _, group in ipairs(redis.call('XINFO', 'GROUPS', KEYS[1])) do
+    local g = {}
+    for i = 1, #group, 2 do g[group[i]] = group[i + 1] end
+    if g['name'] == ARGV[1] then
+      local ms, seq = string.match(g['last-delivered-id'], '^(%d+)-(%d+)$')
+      if ms then min_id = ms .. '-' .. (tonumber(seq) + 1) end
+    end
+  end
+end
+if min_id then redis.call('XTRIM', KEYS[1], 'MINID', min_id) end
+return redis.call('XLEN', KEYS[1]))";
+
 struct Entry {
   std::string id, job, tile;
 };
@@ -149,7 +173,7 @@ class Consumer {
  private:
   std::string IdleMs() const { return std::to_string(int64_t(options_.queue.idle_timeout_s * 1000)); }
 
-  void Ack(const Entry& e) { redis_.Command({"XACK", keys_.Stream(), kRedisGroup, e.id}); }
+  void Ack(const Entry& e) { redis_.Command({"EVAL", kAckScript, "1", keys_.Stream(), kRedisGroup, e.id}); }
 
   void Handle(const Entry& e) {
     const RedisReply status = redis_.Command({"EVAL", kStartScript, "1", keys_.Job(e.job), NowRfc3339()});

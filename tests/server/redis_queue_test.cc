@@ -101,6 +101,53 @@ TEST_F(RedisQueue, CancellingThroughAnotherApiNodeStopsTheTiles) {
   std::printf("[ redis ] dismissed through the other API node; running tiles stopped in %.2f s\n", stop_s);
 }
 
+// Acknowledged tiles leave the stream (XTRIM MINID after each XACK): it holds only queued
+// and running tiles, and is empty after each job; the group's lag stays defined.
+TEST_F(RedisQueue, AcknowledgedTilesLeaveTheStream) {
+  const json job = MakeJob(/*iterations=*/1);
+  const Process& api = StartApi();
+  StartWorker();
+  StartWorker();
+  RedisConnection redis(ParseRedisUrl(url_));
+  const auto stream_info = [&] {  // XINFO STREAM as a map of its integer fields
+    std::map<std::string, long long> out;
+    const RedisReply r = redis.Command({"XINFO", "STREAM", "satmesh:tiles"});
+    for (size_t i = 0; i + 1 < r.elements.size(); i += 2) out[r.elements[i].str] = r.elements[i + 1].integer;
+    return out;
+  };
+  const auto group_lag = [&]() -> std::optional<long long> {
+    const RedisReply groups = redis.Command({"XINFO", "GROUPS", "satmesh:tiles"});
+    const auto& g = groups.elements.at(0).elements;
+    for (size_t i = 0; i + 1 < g.size(); i += 2)
+      if (g[i].str == "lag") return g[i + 1].nil() ? std::nullopt : std::optional(g[i + 1].integer);
+    return std::nullopt;
+  };
+  for (int round = 1; round <= 2; ++round) {
+    const std::string id = Submit(api, job);
+    ASSERT_FALSE(id.empty());
+    long long max_length = 0;
+    json info;
+    const auto until = Clock::now() + std::chrono::seconds(300);
+    do {  // the length while the job runs, sampled every 20 ms
+      max_length = std::max(max_length, redis.Command({"XLEN", "satmesh:tiles"}).integer);
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      info = Json(Client(api).Get(("/jobs/" + id).c_str()));
+    } while ((info["status"] == "accepted" || info["status"] == "running") && Clock::now() < until);
+    ASSERT_EQ(info["status"], "successful") << info.dump();
+    // The last tile's worker acknowledges after the job ends: wait for that XACK.
+    for (int i = 0; i < 100 && stream_info()["length"] > 0; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const auto after = stream_info();
+    EXPECT_EQ(after.at("length"), 0) << "round " << round;
+    EXPECT_EQ(after.at("entries-added"), 4 * round);
+    EXPECT_LE(max_length, 4);
+    EXPECT_EQ(redis.Command({"XPENDING", "satmesh:tiles", "workers"}).elements.at(0).integer, 0);
+    EXPECT_EQ(group_lag(), std::optional<long long>(0)) << "the group's lag must stay defined";
+    std::printf("[ redis ] job %d: 4 tiles; stream length at most %lld while it ran, %lld after\n", round,
+                max_length, after.at("length"));
+  }
+}
+
 // Throughput (not run by ctest: a measurement; run it alone, under
 // flock /tmp/satmesh-bench.lock): the 16-tile job with 1, 2 and 3 workers, tiles per
 // minute, and Redis's load per tile (commands, bytes in and out) for the model of N machines.
