@@ -1,6 +1,7 @@
 #include "server/real_executor.h"
 
 #include <Eigen/Core>
+#include <spdlog/spdlog.h>
 #include <fcntl.h>
 #include <sys/file.h>
 #include <unistd.h>
@@ -17,6 +18,7 @@
 #include "core/mesh/mesh_io.h"
 #include "core/tiling/input_check.h"
 #include "core/tiling/job.h"
+#include "core/tiling/memory_budget.h"
 #include "proto/job_pictures.h"
 #include "proto/job_spec_json.h"
 #include "server/api_documents.h"
@@ -142,9 +144,25 @@ ExecutionPlan RealExecutor::Plan(const JobSpec& spec) {
 
 json RealExecutor::RunTile(const JobSpec& spec, const TileKey& key, const std::string& job_dir,
                            const Progress& progress) {
-  const JobPlan plan = PlanJob(spec);
+  JobPlan plan = PlanJob(spec);
   const int index = plan.IndexOf(key.x, key.y);
   SATMESH_CHECK(index >= 0, ErrorCode::kInternal, "tile " + key.Name() + " is not in the job's plan");
+  if (tile_memory_budget_mb_ > 0) plan.memory_budget_mb = tile_memory_budget_mb_;
+  const PlannedTile& tile = plan.tiles[size_t(index)];
+  if (plan.memory_budget_mb > 0 && tile.memory.peak_mb > plan.memory_budget_mb) {
+    // Refused before anything starts (the job's biases included); the record as core's
+    // RunTile writes it for a tile over the budget.
+    TileResult refused;
+    refused.index = index;
+    refused.name = tile.Name();
+    refused.estimated_peak_mb = tile.memory.peak_mb;
+    refused.error_code = ErrorCode::kInvalidArgument;
+    refused.error = OverBudgetMessage("tile " + tile.Name(), tile.memory, plan.memory_budget_mb,
+                                      tile_memory_budget_mb_ > 0 ? "this worker's --memory-budget"
+                                                                 : "tiling.memory_budget_mb, --memory-budget");
+    spdlog::warn("{}", refused.error);
+    return proto::TileResultToJson(plan, refused);
+  }
   const double started = UnixSeconds();
   const JobBiases biases = JobBiasesFor(spec, plan, job_dir, progress);
   TileResult result = satmesh::RunTile(TileSpec(spec, biases), plan, index, job_dir, progress);

@@ -12,12 +12,21 @@ namespace satmesh::server {
 // and metrics.json written through proto/.
 class RealExecutor : public JobExecutor {
  public:
+  // tile_memory_budget_mb > 0: the budget each tile's estimated peak (memory_budget.h) is
+  // checked against before it starts, MB, in place of the job's tiling.memory_budget_mb
+  // (which still shapes the tiles where the plan cuts them to fit): a worker's own budget
+  // (satmesh-worker --memory-budget). A tile over it fails unstarted, its record naming the
+  // budget and the need. 0: the job's budget.
+  explicit RealExecutor(double tile_memory_budget_mb = 0) : tile_memory_budget_mb_(tile_memory_budget_mb) {}
   ExecutionPlan Plan(const JobSpec& spec) override;
   nlohmann::json RunTile(const JobSpec& spec, const TileKey& tile, const std::string& job_dir,
                          const Progress& progress) override;
   nlohmann::json Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
                           const std::vector<nlohmann::json>& tile_results,
                           const std::string& job_dir) override;
+
+ private:
+  double tile_memory_budget_mb_ = 0;
 };
 
 // Writes a minimal 3D Tiles 1.1 tileset.json listing tiles/<x>_<y>.glb under one root,

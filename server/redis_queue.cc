@@ -10,6 +10,7 @@
 
 #include "core/common/error.h"
 #include "server/redis_jobs.h"
+#include "server/redis_worker.h"
 
 namespace satmesh::server {
 namespace {
@@ -48,10 +49,11 @@ std::string NewJobId() {
 std::string RedisQueueOptions::Check() const {
   if (url.empty()) return "queue: a redis://HOST[:PORT][/DB] URL is required";
   if (prefix.empty()) return "queue prefix: empty";
-  if (!(idle_timeout_s >= 0.5 && idle_timeout_s <= 86400))
-    return "idle_timeout_s: " + std::to_string(idle_timeout_s) + " not in [0.5, 86400]";
-  if (max_deliveries < 1) return "max_deliveries: must be >= 1";
-  return "";
+  // The numbers' ranges: the workers' option table (they are the workers' settings).
+  RedisWorkerOptions worker;
+  worker.queue = *this;
+  const std::string problem = CheckOptionRanges(RedisWorkerOptionTable(), worker, /*nested_only=*/true);
+  return problem.empty() ? "" : "--" + problem;
 }
 
 

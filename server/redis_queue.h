@@ -38,8 +38,9 @@ struct RedisQueueOptions {
   std::string url;                 // redis://HOST[:PORT][/DB]
   std::string prefix = "satmesh";  // key prefix, non-empty (deployments sharing a Redis)
   double idle_timeout_s = 30;      // a running tile's entry untouched this long is reclaimed
-                                   // (running workers touch theirs every third of it), s, in [0.5, 86400]
-  int max_deliveries = 3;          // deliveries of a tile before it fails (dead letter), >= 1
+                                   // (running workers touch theirs every third of it), s
+  int max_deliveries = 3;          // deliveries of a tile before it fails (dead letter)
+  // (ranges and help of both: RedisWorkerOptionTable(), redis_worker.h)
   std::string Check() const;
 };
 

@@ -5,11 +5,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <optional>
 #include <thread>
 
 #include "core/common/error.h"
 #include "core/common/threads.h"
+#include "core/tiling/memory_budget.h"
 #include "proto/job_spec_json.h"
 #include "server/redis_jobs.h"
 
@@ -302,12 +304,78 @@ class Consumer {
 
 }  // namespace
 
+const std::vector<RedisWorkerOptionInfo>& RedisWorkerOptionTable() {
+  using Range = OptionRange;
+  using W = RedisWorkerOptions;
+  using Q = RedisQueueOptions;
+  static const std::vector<RedisWorkerOptionInfo> table = {
+      {"threads", &W::threads, Range::In(1, 256), "tiles refined at once"},
+      {"memory-budget", &W::memory_budget_mb, Range::AtLeast(0),
+       "one thread's memory budget, MB; 0: a quarter of the machine's memory / threads. A tile "
+       "estimated over it fails unstarted, naming budget and need"},
+      {"idle-timeout-s", &Q::idle_timeout_s, Range::In(0.5, 86400),
+       "a running tile's entry untouched this long is claimed by another worker, s"},
+      {"max-deliveries", &Q::max_deliveries, Range::AtLeast(1),
+       "deliveries of a tile before it fails (dead letter)"},
+  };
+  return table;
+}
+
 std::string RedisWorkerOptions::Check() const {
   const std::string q = queue.Check();
   if (!q.empty()) return q;
   if (data_dir.empty()) return "data_dir: required";
-  if (threads < 1 || threads > 256) return "threads: " + std::to_string(threads) + " not in [1, 256]";
-  return "";
+  const std::string problem = CheckOptionRanges(RedisWorkerOptionTable(), *this);
+  return problem.empty() ? "" : "--" + problem;
+}
+
+double RedisWorkerOptions::MemoryBudgetMb() const {
+  return memory_budget_mb > 0 ? memory_budget_mb : DefaultMemoryBudgetMb(threads);
+}
+
+std::string RedisWorkerUsage() {
+  std::string out =
+      "usage: satmesh-worker --queue redis://HOST:PORT[/DB] --data-dir DIR [--prefix satmesh] [--name NAME]\n";
+  for (const RedisWorkerOptionInfo& o : RedisWorkerOptionTable()) {
+    const std::string flag = "[--" + std::string(o.name) + " " + OptionValueText(o.Default()) + "]";
+    out += "  " + flag + std::string(flag.size() < 24 ? 24 - flag.size() : 1, ' ') + std::string(o.help) + " (" +
+           o.RangeText() + ")\n";
+  }
+  return out;
+}
+
+RedisWorkerOptions ParseRedisWorkerArgs(const std::vector<std::string>& args) {
+  RedisWorkerOptions o;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    SATMESH_CHECK(arg.rfind("--", 0) == 0 && i + 1 < args.size(), ErrorCode::kInvalidArgument,
+                  "unexpected argument '" + arg + "'\n" + RedisWorkerUsage());
+    const std::string key = arg.substr(2), value = args[++i];
+    if (key == "queue") o.queue.url = value;
+    else if (key == "data-dir") o.data_dir = value;
+    else if (key == "prefix") o.queue.prefix = value;
+    else if (key == "name") o.name = value;
+    else if (const RedisWorkerOptionInfo* option = FindOption(RedisWorkerOptionTable(), key)) {
+      size_t used = 0;
+      double v = 0;
+      try {
+        v = std::stod(value, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      const bool integer = option->type() == OptionType::kInt;
+      SATMESH_CHECK(used == value.size() && !value.empty() && (!integer || v == std::floor(v)),
+                    ErrorCode::kInvalidArgument,
+                    arg + ": expected " + (integer ? "an integer" : "a number") + ", got '" + value + "'");
+      option->Set(&o, integer ? OptionValue(int(std::clamp(v, -1e9, 1e9))) : OptionValue(v));
+    } else {
+      ThrowError(ErrorCode::kInvalidArgument, "unknown option " + arg + "\n" + RedisWorkerUsage());
+    }
+  }
+  const std::string problem = o.Check();
+  SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, problem + "\n" + RedisWorkerUsage());
+  ParseRedisUrl(o.queue.url);
+  return o;
 }
 
 int RunRedisWorker(const RedisWorkerOptions& options, JobExecutor* executor, const std::atomic<bool>& stop) {
@@ -319,8 +387,8 @@ int RunRedisWorker(const RedisWorkerOptions& options, JobExecutor* executor, con
     ::gethostname(host, sizeof host - 1);
     base = std::string(host) + "-" + std::to_string(::getpid());
   }
-  spdlog::info("satmesh-worker {}: {} thread(s) on {} (data: {})", base, options.threads, options.queue.url,
-               options.data_dir);
+  spdlog::info("satmesh-worker {}: {} thread(s) on {} (data: {}), memory budget {:.0f} MB per thread", base,
+               options.threads, options.queue.url, options.data_dir, options.MemoryBudgetMb());
   std::vector<std::thread> threads;
   for (int i = 0; i < options.threads; ++i)
     threads.emplace_back([&, i] {

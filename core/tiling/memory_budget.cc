@@ -76,14 +76,14 @@ TileMemoryEstimate EstimateTileMemory(const JobSpec& spec, const DsmGrid& grid,
   return out;
 }
 
-std::string OverBudgetMessage(const std::string& what, const TileMemoryEstimate& e, double budget_mb) {
+std::string OverBudgetMessage(const std::string& what, const TileMemoryEstimate& e, double budget_mb,
+                              const std::string& budget_from) {
   char text[400];
   std::snprintf(text, sizeof(text),
                 "%s needs an estimated %.0f MB (%d views, %.1f Mpx of image windows, %.2f M DSM "
-                "cells) but the memory budget is %.0f MB per worker (tiling.memory_budget_mb, "
-                "--memory-budget)",
+                "cells) but the memory budget is %.0f MB per worker",
                 what.c_str(), e.peak_mb, e.views, e.window_px / 1e6, e.dsm_cells / 1e6, budget_mb);
-  return text;
+  return std::string(text) + " (" + budget_from + ")";
 }
 
 }  // namespace satmesh

@@ -44,8 +44,10 @@ TileMemoryEstimate EstimateTileMemory(const JobSpec& spec, const DsmGrid& dsm,
                                       const std::pair<double, double>* heights = nullptr);
 
 // "tile 0_0 needs an estimated 9120 MB (26 views, 170 Mpx of image windows) but the
-// memory budget is 6000 MB per worker": the message of a refused tile.
+// memory budget is 6000 MB per worker (<budget_from>)": the message of a refused tile;
+// budget_from names the setting the budget came from.
 std::string OverBudgetMessage(const std::string& what, const TileMemoryEstimate& estimate,
-                              double budget_mb);
+                              double budget_mb,
+                              const std::string& budget_from = "tiling.memory_budget_mb, --memory-budget");
 
 }  // namespace satmesh

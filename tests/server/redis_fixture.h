@@ -162,12 +162,15 @@ class RedisQueue : public ::testing::Test {
     EXPECT_GT(apis_.back().port, 0);
     return apis_.back();
   }
-  Process& StartWorker(double idle_timeout_s = 30, int max_deliveries = 3) {
+  // `extra`: more satmesh-worker arguments (e.g. --memory-budget MB).
+  Process& StartWorker(double idle_timeout_s = 30, int max_deliveries = 3,
+                       const std::vector<std::string>& extra = {}) {
     const std::string name = "w" + std::to_string(workers_.size());
-    workers_.push_back(Process::Start({SATMESH_WORKER, "--queue", url_, "--data-dir", data_, "--threads", "1",
-                                       "--idle-timeout-s", std::to_string(idle_timeout_s), "--max-deliveries",
-                                       std::to_string(max_deliveries), "--name", name},
-                                      dir_ + "/" + name + ".log"));
+    std::vector<std::string> argv = {SATMESH_WORKER, "--queue", url_, "--data-dir", data_, "--threads", "1",
+                                     "--idle-timeout-s", std::to_string(idle_timeout_s), "--max-deliveries",
+                                     std::to_string(max_deliveries), "--name", name};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    workers_.push_back(Process::Start(argv, dir_ + "/" + name + ".log"));
     return workers_.back();
   }
   static httplib::Client Client(const Process& api) {
