@@ -41,7 +41,9 @@ while [ $# -gt 0 ]; do
   esac
 done
 [ "$(id -u)" -eq 0 ] || { echo "smoke-compose-queue: run as root (podman)" >&2; exit 2; }
-export CONTAINERS_CONF="${CONTAINERS_CONF:-$here/docker/podman-sandbox.conf}"
+# Absolute: podman-compose runs podman from the compose file's folder.
+CONTAINERS_CONF="$(realpath "${CONTAINERS_CONF:-$here/docker/podman-sandbox.conf}")"
+export CONTAINERS_CONF
 
 # Host tools (not project dependencies), installed when missing, as build-image.sh does.
 missing=""
@@ -160,5 +162,12 @@ for w in "${project}_worker_1" "${project}_worker_2"; do
   [ "$n" -ge 1 ] || fail "worker $w refined no tile of job $id"
   per_worker="$per_worker $w: $n"
 done
-echo "smoke-compose-queue: $done_/$total tiles done; tiles per worker:$per_worker"
+# Acknowledged tiles leave the stream (the last XACK follows the job's end by a moment).
+for _ in $(seq 50); do
+  stream=$(podman exec "${project}_redis_1" redis-cli xlen satmesh:tiles)
+  [ "$stream" = 0 ] && break
+  sleep 0.1
+done
+[ "$stream" = 0 ] || fail "the stream satmesh:tiles holds $stream entries after the job (want 0: trimmed)"
+echo "smoke-compose-queue: $done_/$total tiles done; tiles per worker:$per_worker; stream length after: $stream"
 echo "smoke-compose-queue: results: $(ls "$work/inputs/result" | tr '\n' ' ')"

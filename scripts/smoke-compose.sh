@@ -27,6 +27,9 @@ while [ $# -gt 0 ]; do
   esac
 done
 [ "$(id -u)" -eq 0 ] || { echo "smoke-compose: run as root (podman)" >&2; exit 2; }
+# Absolute: podman-compose runs podman from the compose file's folder (a relative
+# CONTAINERS_CONF, as docker/README.md writes it, was not found there).
+if [ -n "${CONTAINERS_CONF:-}" ]; then CONTAINERS_CONF="$(realpath "$CONTAINERS_CONF")"; export CONTAINERS_CONF; fi
 for t in podman podman-compose curl; do
   command -v "$t" >/dev/null || { echo "smoke-compose: $t is not installed (apt-get install podman podman-compose curl)" >&2; exit 2; }
 done
@@ -53,6 +56,7 @@ cleanup() {
   trap - EXIT INT TERM
   if [ "$up" -eq 1 ]; then
     compose down -v >"$work/down.log" 2>&1 || { cat "$work/down.log" >&2; rc=1; }
+    podman network rm -f "${project}_default" >/dev/null 2>&1  # podman-compose 1.0.3 leaves it
     if curl -s -o /dev/null --max-time 2 "$url/health"; then
       echo "smoke-compose: ERROR: port $port still answers after 'podman-compose down'" >&2
       rc=1
