@@ -73,6 +73,19 @@ std::vector<float> HeightConfidenceFromInformation(const std::vector<double>& in
   return confidence;
 }
 
+std::vector<float> InitialPriorWeights(const std::vector<double>& information,
+                                       double noise_variance, double prior_sigma_m) {
+  const double variance = std::max(noise_variance, 1e-12);
+  const double prior_variance = prior_sigma_m * prior_sigma_m;
+  std::vector<float> weight(information.size());
+  for (size_t v = 0; v < information.size(); ++v) {
+    // variance / (variance + prior · information) is sigma_img² / (sigma_img² + prior²)
+    // without dividing by an information of 0.
+    weight[v] = float(variance / (variance + prior_variance * std::max(information[v], 0.0)));
+  }
+  return weight;
+}
+
 // Mean over the pairs of PairHeightInformation, relative to one pair at the optimal angle.
 double MeanRelativePairInformation(const std::vector<StereoPair>& pairs,
                                    const RefineOptions& options) {

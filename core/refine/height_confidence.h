@@ -29,6 +29,15 @@ double MeanRelativePairInformation(const std::vector<StereoPair>& pairs,
 std::vector<float> HeightSigmaFromInformation(const std::vector<double>& information,
                                               double noise_variance);
 
+// The initial surface as a prior (the "never worse than the input"): per vertex,
+// the share of its move that goes back towards where it started at the coarsest level,
+// sigma_img² / (sigma_img² + prior_sigma_m²), sigma_img² = noise_variance / information:
+// the weight of the initial surface in the product of two Gaussians, the images' height
+// estimate (sigma_img) and the initial surface (prior_sigma_m). 1 where no pixel sees the
+// vertex, -> 0 where the images pin it.
+std::vector<float> InitialPriorWeights(const std::vector<double>& information,
+                                       double noise_variance, double prior_sigma_m);
+
 // From the images (height_sigma_gsd > 0): `information` per vertex is the Fisher
 // information Σ w_k² (∂b/∂n)² of the pixels that see it (GradientAccumulator::
 // AddInformation), so its height is known to sigma = sqrt(noise_variance / I).

@@ -43,6 +43,14 @@ constexpr double kKeepMargin = 0.001;
 // sharp as the images ties with it (Pléiades: < 0.001).
 constexpr double kSkipCheckMargin = 0.01;
 
+// At the coarsest level (initial_sigma_gsd > 0), each iteration moves a vertex back
+// towards its start by this fraction of its offset times its InitialPriorWeights weight:
+// a vertex the images do not see returns most of the way within ~20 iterations, and the
+// low-frequency drift a single weakly textured pair produces is bounded instead of
+// growing with the iterations (BENCHMARKS.md, session 13: stereo 0.5 m roofs 0.92x of the
+// initial with 40 iterations and no pull, 0.78x with it; 0.05-0.2 give the same).
+constexpr double kInitialPullPerIteration = 0.1;
+
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
@@ -197,11 +205,21 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   std::vector<double> information;
   std::vector<float> confidence;
   const bool data_confidence = opt.height_sigma_gsd > 0 && opt.min_height_confidence < 1;
-  if (data_confidence || level == 0) information.assign(nv, 0.0);
+  // The coarsest level starts from the initial surface and keeps weakly constrained
+  // vertices near it (InitialPriorWeights); finer levels start from an image-derived one.
+  const bool coarsest = level == opt.levels;
+  const bool initial_prior = coarsest && opt.initial_sigma_gsd > 0;
+  const std::vector<Eigen::Vector3f> start = initial_prior ? mesh->vertices
+                                                           : std::vector<Eigen::Vector3f>{};
+  std::vector<float> prior_weight;
+  if (data_confidence || initial_prior || level == 0) information.assign(nv, 0.0);
+  const int iterations =
+      coarsest ? int(std::lround(opt.coarsest_iterations_factor * opt.iterations_per_level))
+               : opt.iterations_per_level;
 
-  for (int it = 0; it <= opt.iterations_per_level; ++it) {
+  for (int it = 0; it <= iterations; ++it) {
     ctx.progress.ThrowIfCancelled();
-    const bool last = it == opt.iterations_per_level;
+    const bool last = it == iterations;
     auto t0 = Clock::now();
     const auto normals = FaceNormals(*mesh);
     if (it > 0 && !last && it % opt.hit_maps_every != 0) {
@@ -224,11 +242,14 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, normals, photo, &scratch,
                                         last ? nullptr : &gradient, last ? nullptr : &seen,
                                         half ? it % 2 : -1,
-                                        (it == 0 && data_confidence) || (last && level == 0)
+                                        (it == 0 && (data_confidence || initial_prior)) ||
+                                                (last && level == 0)
                                             ? &information
                                             : nullptr);
     if (it == 0 && data_confidence)
       confidence = HeightConfidenceFromInformation(information, noise_variance, gsd, opt, &stats);
+    if (it == 0 && initial_prior)
+      prior_weight = InitialPriorWeights(information, noise_variance, opt.initial_sigma_gsd * gsd);
     stats.mean_zncc.push_back(zncc);
     stats.times.gradient_s += Seconds(t0);
     if (it == 0 && zncc < abandon_below) return false;
@@ -259,6 +280,9 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
               ? double(confidence_of[v])
               : HeightConfidence(seen[v] / directions_per_pair * ctx.mean_pair_information, opt);
       Eigen::Vector3d move = -photo_scale * g - smooth_scale / confidence * u2[v].cast<double>();
+      if (initial_prior)
+        move -= kInitialPullPerIteration * double(prior_weight[v]) *
+                (mesh->vertices[v] - start[v]).cast<double>();
       if (opt.hold_boundary_xy && adjacency.is_boundary[v]) move.x() = move.y() = 0;
       const double len = move.norm();
       if (len > max_move) move *= max_move / len;
@@ -267,7 +291,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     if (scene) scene->UpdateVertices(mesh->vertices);
     stats.times.update_s += Seconds(t0);
     ++stats.iterations;
-    const double done = (opt.levels - level + double(it + 1) / (opt.iterations_per_level + 1));
+    const double done = (opt.levels - level + double(it + 1) / (iterations + 1));
     ctx.progress.Report(done / (opt.levels + 1), "level " + std::to_string(level));
   }
   stats.level_s = Seconds(level_start);

@@ -34,6 +34,9 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "levels -1: bound of the coarse mesh's triangle edge, m"},
       {"iterations_per_level", &R::iterations_per_level, Range::In(0, 1000),
        "gradient steps per level"},
+      {"coarsest_iterations_factor", &R::coarsest_iterations_factor, Range::In(1, 10),
+       "the coarsest level (it starts from the initial surface) takes this times "
+       "iterations_per_level gradient steps"},
       {"alpha", &R::alpha, Range::AtLeast(0), "weight of the photometric term (ZNCC)"},
       {"beta", &R::beta, Range::AtLeast(0),
        "weight of the thin-plate term (homogenised by 1/GSD^2)"},
@@ -82,6 +85,11 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "> 0: a vertex's height confidence from the images (Fisher information of its pixels under "
        "the images' noise): 1 where they determine its height to within this many level GSDs "
        "(1 sigma), (this / sigma)^2 below; 0: from the pairs' geometry"},
+      {"initial_sigma_gsd", &R::initial_sigma_gsd, Range::AtLeast(0),
+       "> 0: at the coarsest level each vertex is pulled back towards the initial surface by "
+       "the share sigma_img^2 / (sigma_img^2 + this^2) of its images' height sigma (this: the "
+       "initial surface's 1-sigma error in level GSD), so weakly constrained parts do not "
+       "drift; 0: off"},
       {"hold_unseen", &R::hold_unseen, {},
        "vertices no pair-direction sees (occluded, grazing) do not move"},
       {"hold_boundary_xy", &R::hold_boundary_xy, {},

@@ -34,6 +34,9 @@ struct RefineOptions {
                                    // start does not smooth away walls and structures of
                                    // twice this size
   int iterations_per_level = 20;   // gradient steps per level
+  double coarsest_iterations_factor = 2.0;  // the coarsest level, which starts from the
+                                           // initial surface, takes this x
+                                           // iterations_per_level gradient steps
   double alpha = 2.0;              // weight of the photometric term M
   double beta = 0.1;               // weight of the thin-plate term (homogenised by 1/GSD²)
   double step = 0.5;               // gradient step, in units of (level GSD)²
@@ -84,6 +87,11 @@ struct RefineOptions {
                                    // (1 sigma), falling as (this / sigma)² to
                                    // min_height_confidence; 0: from the pairs' geometry
                                    // only (HeightConfidence)
+  double initial_sigma_gsd = 1.5;  // > 0: at the coarsest level each vertex is pulled back
+                                   // towards the initial surface in proportion to how
+                                   // little the images constrain it (InitialPriorWeights:
+                                   // sigma_img² / (sigma_img² + this²), this in level GSD,
+                                   // the initial surface's assumed 1-sigma error); 0: off
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/refine/height_confidence.h"
 #include "tests/core/refine/plane_scene.h"
 
 namespace satmesh {
@@ -112,6 +113,7 @@ TEST(Refine, RestartsFromTheInitialSurfaceWhenItExplainsTheImagesBetter) {
                                                      /*finer_off_m=*/0.0);
   RefineOptions o = SmallOptions();
   o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;  // one iteration at every level, the coarsest too
   const RefineResult result = Refine(input, o);
   ASSERT_EQ(result.levels.size(), 3u);
   EXPECT_TRUE(std::isnan(result.levels[0].initial_zncc));  // the coarsest: nothing to compare
@@ -140,6 +142,7 @@ TEST(Refine, StopsMeasuringTheInitialSurfaceOnceTheChainWinsClearly) {
                                                      /*finer_off_m=*/3.0);
   RefineOptions o = SmallOptionsTwoPairs();
   o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;  // one iteration at every level, the coarsest too
   const RefineResult result = Refine(input, o);
   ASSERT_EQ(result.levels.size(), 3u);
   EXPECT_FALSE(std::isnan(result.levels[1].initial_zncc));  // measured once
@@ -244,6 +247,7 @@ TEST(Refine, HeightSigmaFromTheImagesFollowsTheBaseToHeightRatio) {
   RefineOptions options = SmallOptions();
   options.levels = 0;
   options.iterations_per_level = 1;
+  options.coarsest_iterations_factor = 1;
   options.height_sigma_gsd = 0.1;
   std::vector<double> median_sigma;
   for (const double gamma : {15.0, 35.0}) {
@@ -264,6 +268,50 @@ TEST(Refine, HeightSigmaFromTheImagesFollowsTheBaseToHeightRatio) {
   }
   const double expected = std::tan(17.5 * M_PI / 180) / std::tan(7.5 * M_PI / 180);
   EXPECT_NEAR(median_sigma[0] / median_sigma[1], expected, 0.15 * expected);
+}
+
+// The initial surface's weight in the product of the images' height estimate (sigma_img² =
+// noise / information) and the initial surface (prior sigma): 1 unseen, 1/2 where both
+// are equally sure, -> 0 where the images pin the vertex.
+TEST(InitialPriorWeights, IsTheInitialSurfacesShareOfTheTwoVariances) {
+  const double noise = 4.0, prior = 0.5;  // prior variance 0.25
+  const std::vector<float> w = InitialPriorWeights({0.0, 16.0, 4.0 * 16.0, 1e9}, noise, prior);
+  ASSERT_EQ(w.size(), 4u);
+  EXPECT_FLOAT_EQ(w[0], 1.0f);        // no pixel: the initial surface alone
+  EXPECT_FLOAT_EQ(w[1], 0.5f);        // sigma_img² = 4 / 16 = 0.25 = prior²
+  EXPECT_FLOAT_EQ(w[2], 0.2f);        // sigma_img² = 1/16: 0.0625 / (0.0625 + 0.25)
+  EXPECT_LT(w[3], 1e-6f);
+}
+
+// A weakly textured plane under strong noise, started on the truth: matching noise moves
+// weakly constrained vertices; the pull towards the initial surface (initial_sigma_gsd)
+// keeps them near it over many iterations, where without it they drift further.
+TEST(Refine, InitialPriorKeepsWeaklyConstrainedVerticesNearTheStart) {
+  const testing::Plane plane;
+  auto input = testing::MakePlaneInput(plane, {{8, 10}, {8, 190}},
+                                       testing::PlaneMesh(plane, 40, 1.0, 0.0));
+  uint32_t state = 777;
+  for (auto& view : input.views) {
+    float mean = 0;
+    for (float px : view.image.pixels) mean += px;
+    mean /= float(view.image.pixels.size());
+    for (float& px : view.image.pixels) {
+      state = state * 1664525u + 1013904223u;
+      px = mean + 0.05f * (px - mean) + 60.f * (float(state >> 8) / float(1 << 24) - 0.5f);
+    }
+  }
+  RefineOptions options = SmallOptions();
+  options.levels = 0;
+  options.iterations_per_level = 30;  // 60 at the coarsest (factor 2)
+  std::vector<double> mean_error;
+  for (const double prior : {0.0, 1.5}) {
+    options.initial_sigma_gsd = prior;
+    const RefineResult result = Refine(input, options);
+    mean_error.push_back(PlaneError(result.mesh, plane, 30).first);
+  }
+  EXPECT_LT(mean_error[1], 0.7 * mean_error[0]) << "without: " << mean_error[0]
+                                                 << " m, with: " << mean_error[1] << " m";
+  EXPECT_LT(mean_error[1], 0.25);  // 0.5 GSD
 }
 
 }  // namespace
