@@ -6,20 +6,22 @@
 #     the refinement's numerics are left to the normal build (minutes under ASan)
 #  2. every fuzz target of tests/fuzz over its committed corpus (seeds + regressions: a
 #     crash found once stays fixed), then FUZZ_S seconds of new fuzzing each
-#     (default 20; 0 = corpus only), two targets at a time
-#   scripts/sanitize.sh [--fuzz-seconds N] [--seeds] [--no-tests]
+#     (default 60, the issue's CI run; 0 = corpus only), P targets at a time (default 2,
+#     CI's two cores; 1 on a machine shared with others)
+#   scripts/sanitize.sh [--fuzz-seconds N] [--fuzz-parallel P] [--seeds] [--no-tests]
 # --seeds rewrites the seed corpora from our writers (tests/fuzz/corpus/<target>/).
 # Needs clang-14, libfuzzer-14-dev, libomp-14-dev (docker/deps-debian12-test.txt).
 # Fuzzing finds are written to build-asan/fuzz-findings/<target>/; a find fails the run.
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
-fuzz_s=20 seeds=0 tests=1
+fuzz_s=60 fuzz_parallel=2 seeds=0 tests=1
 while [ $# -gt 0 ]; do
   case "$1" in
     --fuzz-seconds) fuzz_s="$2"; shift 2 ;;
+    --fuzz-parallel) fuzz_parallel="$2"; shift 2 ;;
     --seeds) seeds=1; shift ;;
     --no-tests) tests=0; shift ;;
-    *) echo "usage: scripts/sanitize.sh [--fuzz-seconds N] [--seeds] [--no-tests]" >&2; exit 2 ;;
+    *) echo "usage: scripts/sanitize.sh [--fuzz-seconds N] [--fuzz-parallel P] [--seeds] [--no-tests]" >&2; exit 2 ;;
   esac
 done
 build="$here/build-asan"
@@ -68,5 +70,5 @@ run_one() {
 }
 export -f run_one
 export build corpus findings fuzz_s
-printf '%s\n' "${targets_fuzz[@]}" | xargs -P 2 -I{} bash -c 'run_one {}'
-echo "sanitize: fuzz $((SECONDS - t2)) s; total $((SECONDS - t0)) s"
+printf '%s\n' "${targets_fuzz[@]}" | xargs -P "$fuzz_parallel" -I{} bash -c 'run_one {}'
+echo "sanitize: fuzz $((SECONDS - t2)) s ($fuzz_parallel at a time); total $((SECONDS - t0)) s"
