@@ -79,9 +79,11 @@ ExportedView ExportView(const RefineInput& input, int index, const Eigen::Vector
   };
   out.fit = FitPinhole(pixel_from_local, lo, hi);
   WritePng((image_dir / out.name).string(), NormalizeRadiometry(view.image), 0.f, 1.f);
-  spdlog::info("{} ({}): {}x{} px, pinhole rms {:.4f} px, max {:.4f} px (DLT skew {:.1f} px)",
+  spdlog::info("{} ({}): {}x{} px, pinhole rms {:.4f} px, max {:.4f} px (DLT rms {:.4f} px, "
+               "skew {:.1f} px; {} iterations)",
                out.name, view.name, out.width, out.height, out.fit.rms_px,
-               std::max(out.fit.max_px, out.fit.max_px_half_step), out.fit.dlt_skew_px);
+               std::max(out.fit.max_px, out.fit.max_px_half_step), out.fit.dlt_rms_px,
+               out.fit.dlt_skew_px, out.fit.iterations);
   return out;
 }
 
@@ -127,7 +129,9 @@ void WriteFrameJson(const RefineInput& input, const std::string& crs, const std:
                            {"height", v.height},
                            {"pinhole_rms_px", v.fit.rms_px},
                            {"pinhole_max_px", std::max(v.fit.max_px, v.fit.max_px_half_step)},
-                           {"dlt_skew_px", v.fit.dlt_skew_px}});
+                           {"dlt_rms_px", v.fit.dlt_rms_px},
+                           {"dlt_skew_px", v.fit.dlt_skew_px},
+                           {"iterations", v.fit.iterations}});
   std::ofstream f = OpenForWrite(path);
   f << j.dump(2) << "\n";
   SATMESH_CHECK(f.good(), ErrorCode::kIo, "writing '" + path.string() + "' failed");
