@@ -11,6 +11,10 @@
 #                     WORK/<scene name>/{satmesh,colmap,*.time,*.eval.json,*.log}
 #        BENCH_LOCK   lock file taken around every timed run (default /tmp/satmesh-bench.lock)
 #        SATMESH_SET  extra `--set key=value` arguments for satmesh refine (default none)
+#        OPENMVS_INITIAL  dsm (default: the initial DSM as a full-resolution grid mesh) or
+#                     coarse (the coarse mesh satmesh starts from), export-colmap --initial
+#        OPENMVS_BIAS 1: give OpenMVS the RPC biases satmesh estimates (satmesh bias
+#                     --write-job, untimed); default 0: the job's RPCs as they are
 set -euo pipefail
 
 repo=$(cd "$(dirname "$0")/../.." && pwd)
@@ -55,7 +59,14 @@ timed() {
 timed satmesh "$SATMESH" refine "$scene/job.json" --out "$out/satmesh" ${SATMESH_SET:-}
 
 # 2. OpenMVS: pinholes fitted to the RPCs, 8-bit images, the initial DSM as a grid mesh.
-timed export "$SATMESH" export-colmap "$scene/job.json" --out "$out/colmap"
+export_job=$scene/job.json
+if [ "${OPENMVS_BIAS:-0}" = 1 ]; then
+  echo "== satmesh bias --job $scene/job.json --write-job $out/job_with_bias.json"
+  "$SATMESH" bias --job "$scene/job.json" --write-job "$out/job_with_bias.json" > "$out/bias.log" 2>&1
+  export_job=$out/job_with_bias.json
+fi
+timed export "$SATMESH" export-colmap "$export_job" --out "$out/colmap" \
+  --initial "${OPENMVS_INITIAL:-dsm}"
 timed interface "$OPENMVS_BIN/InterfaceCOLMAP" -w "$out/colmap" -i "$out/colmap" \
   -o "$out/colmap/scene.mvs" --image-folder "$out/colmap/images/"
 timed refinemesh "$OPENMVS_BIN/RefineMesh" -w "$out/colmap" -i "$out/colmap/scene.mvs" \
@@ -105,12 +116,14 @@ def faces_satmesh():
         return "?"
 
 load = open("/proc/loadavg").read().split()[:3]
-print(f"\nscene {scene}  (load average now {' '.join(load)}, {os.cpu_count()} CPUs)")
+print(f"\nOpenMVS input: {os.environ.get('OPENMVS_INITIAL', 'dsm')} mesh, "
+      f"{'biases estimated by satmesh' if os.environ.get('OPENMVS_BIAS') == '1' else 'the job RPCs'}")
+print(f"scene {scene}  (load average now {' '.join(load)}, {os.cpu_count()} CPUs)")
 print("| | roofs NMAD m | roofs perc-68 m | facades @0.5 | under overhangs @0.5 | F @0.5 "
       "| wall s | CPU s | peak MB | faces |")
 print("|---|---|---|---|---|---|---|---|---|---|")
 print("| initial DSM | " + " | ".join(metrics("satmesh", "initial")) + " | | | | |")
-print("| initial.ply (frame round trip) | " + " | ".join(metrics("initial")) + " | | | | |")
+print("| initial.ply via --frame (OpenMVS input) | " + " | ".join(metrics("initial")) + " | | | | |")
 print("| OpenMVS RefineMesh | " + " | ".join(metrics("openmvs") + timing("refinemesh")) +
       f" | {faces_openmvs()} |")
 print("| satmesh refine | " + " | ".join(metrics("satmesh") + timing("satmesh")) +
