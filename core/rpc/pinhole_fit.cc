@@ -157,7 +157,7 @@ double Cost(const PinholeCamera& c, const std::vector<Sample>& samples) {
 
 // Levenberg-Marquardt with Marquardt's diagonal damping, solved on the Jacobi-scaled
 // normal equations (focal length and distance are nearly degenerate for a far camera).
-int Refine(const std::vector<Sample>& samples, int max_iterations, PinholeCamera* camera) {
+int LevenbergMarquardt(const std::vector<Sample>& samples, int max_iterations, PinholeCamera* camera) {
   double lambda = 1e-3;
   int iterations = 0;
   for (; iterations < max_iterations; ++iterations) {
@@ -257,7 +257,7 @@ PinholeFitResult FitPinhole(
   c.cx += k(0, 1) * mean_y_over_z / double(samples.size());
 
   // 3. Levenberg-Marquardt on the zero-skew pinhole.
-  result.iterations = Refine(samples, options.max_iterations, &c);
+  result.iterations = LevenbergMarquardt(samples, options.max_iterations, &c);
 
   Errors(c, samples, &result.rms_px, &result.max_px);
   const std::vector<Sample> shifted =
