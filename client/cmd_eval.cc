@@ -48,20 +48,20 @@ TriangleMesh MeshFromFrame(const std::string& result_path, const std::string& fr
   SATMESH_CHECK(in.good(), ErrorCode::kNotFound, "cannot read --frame '" + frame_path + "'");
   const nlohmann::json j = nlohmann::json::parse(in);
   const auto& c = j.at("center_lon_lat_h");
-  const LocalFrame frame(Eigen::Vector3d(c.at(0).get<double>(), c.at(1).get<double>(),
-                                         c.at(2).get<double>()));
+  const LocalFrame frame(
+      Eigen::Vector3d(c.at(0).get<double>(), c.at(1).get<double>(), c.at(2).get<double>()));
   const std::string crs = j.at("crs").get<std::string>();
   std::string mesh_path = result_path;
   if (std::filesystem::is_directory(mesh_path)) mesh_path += "/mesh.ply";
   TriangleMesh mesh = ReadMesh(mesh_path);
   std::vector<Eigen::Vector3d> points(mesh.vertices.size());
-  for (size_t i = 0; i < points.size(); ++i)
-    points[i] = frame.GeoFromLocal(mesh.AbsoluteVertex(i));
+  for (size_t i = 0; i < points.size(); ++i) points[i] = frame.GeoFromLocal(mesh.AbsoluteVertex(i));
   CrsTransform(kWgs84Geographic3D, crs).Apply(&points);
   mesh.crs = crs;
   mesh.origin.setZero();
   if (!points.empty()) mesh.origin = points.front().array().round().matrix();
-  for (size_t i = 0; i < points.size(); ++i) mesh.vertices[i] = (points[i] - mesh.origin).cast<float>();
+  for (size_t i = 0; i < points.size(); ++i)
+    mesh.vertices[i] = (points[i] - mesh.origin).cast<float>();
   return mesh;
 }
 
@@ -108,8 +108,8 @@ int RunEval(const std::vector<std::string>& argv) {
     SATMESH_CHECK(f.good(), ErrorCode::kIo, "writing --json file '" + *out + "' failed");
   }
   if (auto dir = args.Get("pictures")) {
-    for (const auto& path : WriteEvalPictures(args.Require("scene"), args.Require("result"), e, *dir,
-                                              args.GetDouble("error-range-m", 2.0)))
+    for (const auto& path : WriteEvalPictures(args.Require("scene"), args.Require("result"), e,
+                                              *dir, args.GetDouble("error-range-m", 2.0)))
       std::printf("picture: %s\n", path.c_str());
   }
   return kExitOk;

@@ -79,11 +79,12 @@ ExportedView ExportView(const RefineInput& input, int index, const Eigen::Vector
   };
   out.fit = FitPinhole(pixel_from_local, lo, hi);
   WritePng((image_dir / out.name).string(), NormalizeRadiometry(view.image), 0.f, 1.f);
-  spdlog::info("{} ({}): {}x{} px, pinhole rms {:.4f} px, max {:.4f} px (DLT rms {:.4f} px, "
-               "skew {:.1f} px; {} iterations)",
-               out.name, view.name, out.width, out.height, out.fit.rms_px,
-               std::max(out.fit.max_px, out.fit.max_px_half_step), out.fit.dlt_rms_px,
-               out.fit.dlt_skew_px, out.fit.iterations);
+  spdlog::info(
+      "{} ({}): {}x{} px, pinhole rms {:.4f} px, max {:.4f} px (DLT rms {:.4f} px, "
+      "skew {:.1f} px; {} iterations)",
+      out.name, view.name, out.width, out.height, out.fit.rms_px,
+      std::max(out.fit.max_px, out.fit.max_px_half_step), out.fit.dlt_rms_px, out.fit.dlt_skew_px,
+      out.fit.iterations);
   return out;
 }
 
@@ -163,8 +164,8 @@ int RunExportColmap(const std::vector<std::string>& argv) {
     views.push_back(ExportView(input, i, lo, hi, out / "images"));
   WriteColmapModel(views, out / "sparse");
 
-  TriangleMesh mesh = initial == "dsm" ? input.initial_for_edge(2 * input.initial_cell_m)
-                                       : input.initial_mesh;
+  TriangleMesh mesh =
+      initial == "dsm" ? input.initial_for_edge(2 * input.initial_cell_m) : input.initial_mesh;
   MeshWriteOptions ply;
   ply.ply_double = false;  // frame coordinates are small; frame-camera tools read floats
   WriteMesh((out / "initial.ply").string(), mesh, ply);
@@ -172,9 +173,10 @@ int RunExportColmap(const std::vector<std::string>& argv) {
                  views, out / "frame.json");
   double worst = 0;
   for (const auto& v : views) worst = std::max({worst, v.fit.max_px, v.fit.max_px_half_step});
-  std::printf("export-colmap: %zu views (pinholes within %.3f px of the RPCs), initial mesh "
-              "%zu faces (%s), in %s\n",
-              views.size(), worst, mesh.faces.size(), initial.c_str(), out.string().c_str());
+  std::printf(
+      "export-colmap: %zu views (pinholes within %.3f px of the RPCs), initial mesh "
+      "%zu faces (%s), in %s\n",
+      views.size(), worst, mesh.faces.size(), initial.c_str(), out.string().c_str());
   return kExitOk;
 }
 

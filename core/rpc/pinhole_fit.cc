@@ -26,7 +26,8 @@ struct Sample {
 std::vector<Eigen::Vector3d> Grid(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n_xy,
                                   int n_z, double shift) {
   const int m_xy = shift > 0 ? n_xy - 1 : n_xy, m_z = shift > 0 ? n_z - 1 : n_z;
-  const Eigen::Vector3d step = (hi - lo).cwiseQuotient(Eigen::Vector3d(n_xy - 1, n_xy - 1, n_z - 1));
+  const Eigen::Vector3d step =
+      (hi - lo).cwiseQuotient(Eigen::Vector3d(n_xy - 1, n_xy - 1, n_z - 1));
   std::vector<Eigen::Vector3d> out;
   out.reserve(static_cast<size_t>(m_xy) * m_xy * m_z);
   for (int k = 0; k < m_z; ++k)
@@ -83,7 +84,8 @@ Matrix34d Dlt(const std::vector<Sample>& samples) {
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinV);
   const Eigen::Matrix<double, 12, 1> p = svd.matrixV().col(11);
   Matrix34d normalised;
-  normalised << p.segment<4>(0).transpose(), p.segment<4>(4).transpose(), p.segment<4>(8).transpose();
+  normalised << p.segment<4>(0).transpose(), p.segment<4>(4).transpose(),
+      p.segment<4>(8).transpose();
   return t2.inverse() * normalised * t3;
 }
 
@@ -140,9 +142,9 @@ PinholeCamera Updated(const PinholeCamera& c, const Vector10d& delta) {
   PinholeCamera out = c;
   out.fx += delta[0], out.fy += delta[1], out.cx += delta[2], out.cy += delta[3];
   const Eigen::Vector3d w = delta.segment<3>(4);
-  const Eigen::Matrix3d dr =
-      w.norm() > 0 ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
-                   : Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d dr = w.norm() > 0
+                                 ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
+                                 : Eigen::Matrix3d::Identity();
   out.cam_from_local_rotation = dr * c.cam_from_local_rotation;
   // d(camera point) = w x (R X) + dt, as Linearise's Jacobian has it.
   out.cam_from_local_translation = c.cam_from_local_translation + delta.segment<3>(7);
@@ -157,7 +159,8 @@ double Cost(const PinholeCamera& c, const std::vector<Sample>& samples) {
 
 // Levenberg-Marquardt with Marquardt's diagonal damping, solved on the Jacobi-scaled
 // normal equations (focal length and distance are nearly degenerate for a far camera).
-int LevenbergMarquardt(const std::vector<Sample>& samples, int max_iterations, PinholeCamera* camera) {
+int LevenbergMarquardt(const std::vector<Sample>& samples, int max_iterations,
+                       PinholeCamera* camera) {
   double lambda = 1e-3;
   int iterations = 0;
   for (; iterations < max_iterations; ++iterations) {

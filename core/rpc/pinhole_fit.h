@@ -17,9 +17,10 @@
 namespace satmesh {
 
 struct PinholeFitOptions {
-  int grid_xy = 11;         // samples per x and per y axis of the box, [2, 200]
-  int grid_z = 5;           // samples along z, [2, 100]
-  int max_iterations = 1000;  // Levenberg-Marquardt iterations, [0, 10000] (0: DLT only, skew zeroed)
+  int grid_xy = 11;  // samples per x and per y axis of the box, [2, 200]
+  int grid_z = 5;    // samples along z, [2, 100]
+  int max_iterations =
+      1000;  // Levenberg-Marquardt iterations, [0, 10000] (0: DLT only, skew zeroed)
   std::string Check() const;  // "" when valid, else a message naming the field
 };
 

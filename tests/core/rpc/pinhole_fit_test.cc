@@ -35,9 +35,9 @@ TEST(FitPinhole, RecoversAnExactPinhole) {
   // A far, tilted camera (600 km, 20 degrees off nadir) with non-square pixels.
   PinholeCamera truth;
   truth.fx = 2.0e6, truth.fy = 2.1e6, truth.cx = 512.5, truth.cy = -300;
-  truth.cam_from_local_rotation =
-      (Eigen::AngleAxisd(3.0, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitY()))
-          .toRotationMatrix();
+  truth.cam_from_local_rotation = (Eigen::AngleAxisd(3.0, Eigen::Vector3d::UnitX()) *
+                                   Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitY()))
+                                      .toRotationMatrix();
   truth.cam_from_local_translation = Eigen::Vector3d(10, -20, 6.0e5);
   const auto camera = [&](const Eigen::Vector3d& x) { return truth.PixelFromLocal(x); };
   const PinholeFitResult fit = FitPinhole(camera, {-150, -150, -20}, {150, 150, 40});
@@ -63,10 +63,11 @@ TEST(FitPinhole, SatelliteRpcOverTheAoiWithinATenthOfAPixel) {
       return rpc.PixelFromGeo(frame.GeoFromLocal(x));
     };
     const PinholeFitResult fit = FitPinhole(pixel_from_local, {-150, -150, -20}, {150, 150, 40});
-    std::printf("zenith %.0f deg, %.1f m: DLT skew %.1f px, rms %.4f px; pinhole rms %.4f px, "
-                "max %.4f px, half-step max %.4f px, %d iterations\n",
-                zeniths[i], gsds[i], fit.dlt_skew_px, fit.dlt_rms_px, fit.rms_px, fit.max_px,
-                fit.max_px_half_step, fit.iterations);
+    std::printf(
+        "zenith %.0f deg, %.1f m: DLT skew %.1f px, rms %.4f px; pinhole rms %.4f px, "
+        "max %.4f px, half-step max %.4f px, %d iterations\n",
+        zeniths[i], gsds[i], fit.dlt_skew_px, fit.dlt_rms_px, fit.rms_px, fit.max_px,
+        fit.max_px_half_step, fit.iterations);
     EXPECT_LT(fit.max_px, 0.1) << "zenith " << zeniths[i];
     EXPECT_LT(fit.max_px_half_step, 0.1) << "zenith " << zeniths[i];
     EXPECT_GT(fit.camera.CenterInLocal().z(), 4e5);  // the satellite, hundreds of km up
