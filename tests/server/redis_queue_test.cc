@@ -8,8 +8,12 @@ namespace {
 
 TEST_F(RedisQueue, MultiTileJobMatchesTheSingleProcessRun) {
   // With the job's biases estimated once (by the first worker), as in-process.
-  const json job = MakeJob(/*iterations=*/3, /*aoi_size_m=*/36, /*estimate_bias=*/true);
+  // 4 x 4 tiles of 18 m, submitted through one API node and read through the other, three
+  // workers (issue 22: two API nodes, three workers, a 16-tile job).
+  const json job = MakeJob(/*iterations=*/3, /*aoi_size_m=*/72, /*estimate_bias=*/true);
   const Process& api = StartApi();
+  const Process& other_api = StartApi();
+  StartWorker();
   StartWorker();
   StartWorker();
   const auto t0 = Clock::now();
@@ -18,16 +22,17 @@ TEST_F(RedisQueue, MultiTileJobMatchesTheSingleProcessRun) {
   const json info = WaitEnd(api, id);
   const double queued_s = std::chrono::duration<double>(Clock::now() - t0).count();
   ASSERT_EQ(info["status"], "successful") << info.dump();
-  auto c = Client(api);
+  auto c = Client(other_api);
   const json results = Json(c.Get(("/jobs/" + id + "/results").c_str()));
   const json served = results["metrics"]["value"];
-  ExpectEveryTileOnce(Json(c.Get(("/jobs/" + id + "/tiles").c_str()))["tiles"], served, 4);
+  ExpectEveryTileOnce(Json(c.Get(("/jobs/" + id + "/tiles").c_str()))["tiles"], served, 16);
   EXPECT_EQ(c.Get(("/jobs/" + id + "/results/mesh.ply").c_str())->status, 200);
   EXPECT_EQ(c.Get(("/jobs/" + id + "/tiles/0_0.glb").c_str())->status, 200);
-  const std::string metrics_text = c.Get("/metrics")->body;
-  EXPECT_NE(metrics_text.find("satmesh_workers_seen 2"), std::string::npos) << metrics_text;
-  EXPECT_NE(metrics_text.find("satmesh_tiles_done_total 4"), std::string::npos) << metrics_text;
-  EXPECT_EQ(Json(c.Get("/health"))["workers"], 2);
+  auto submitter = Client(api);
+  const std::string metrics_text = submitter.Get("/metrics")->body;
+  EXPECT_NE(metrics_text.find("satmesh_workers_seen 3"), std::string::npos) << metrics_text;
+  EXPECT_NE(metrics_text.find("satmesh_tiles_done_total 16"), std::string::npos) << metrics_text;
+  EXPECT_EQ(Json(c.Get("/health"))["workers"], 3);
 
   const auto t1 = Clock::now();
   const JobOutputs local = RunJob(proto::JobSpecFromJson(job, scene_), dir_ + "/local");
@@ -63,7 +68,7 @@ TEST_F(RedisQueue, MultiTileJobMatchesTheSingleProcessRun) {
   for (size_t v = 0; v < a.vertices.size(); ++v)
     max_diff = std::max(max_diff, (a.AbsoluteVertex(v) - b.AbsoluteVertex(v)).cwiseAbs().maxCoeff());
   EXPECT_LT(max_diff, 1e-3);
-  std::printf("[ redis ] 4 tiles, 2 workers: submit->successful %.1f s; in-process (1 worker) %.1f s\n", queued_s,
+  std::printf("[ redis ] 16 tiles, 2 API nodes, 3 workers: submit->successful %.1f s; in-process (1 worker) %.1f s\n", queued_s,
               local_s);
 }
 
