@@ -10,6 +10,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <string>
+#include <vector>
 #include <numbers>
 
 #include "core/common/error.h"
@@ -30,6 +32,30 @@ std::string LastGdalError() {
   const char* msg = CPLGetLastErrorMsg();
   return (msg && *msg) ? std::string(": ") + msg : std::string();
 }
+
+// Every GDAL failure message raised while it lives, in order (GDAL keeps only the last:
+// a write that fails for lack of space can be followed by a libtiff error that no longer
+// says why, e.g. "TIFFReadDirectory: Failed to read directory").
+class GdalErrorCollector {
+ public:
+  GdalErrorCollector() { CPLPushErrorHandlerEx(&Collect, this); }
+  ~GdalErrorCollector() { CPLPopErrorHandler(); }
+  GdalErrorCollector(const GdalErrorCollector&) = delete;
+  GdalErrorCollector& operator=(const GdalErrorCollector&) = delete;
+  // ": first; ...; last" or "" when none.
+  std::string Joined() const {
+    std::string out;
+    for (const auto& m : messages_) out += (out.empty() ? ": " : "; ") + m;
+    return out;
+  }
+
+ private:
+  static void CPL_STDCALL Collect(CPLErr level, CPLErrorNum, const char* msg) {
+    auto* self = static_cast<GdalErrorCollector*>(CPLGetErrorHandlerUserData());
+    if (level >= CE_Failure && self && msg) self->messages_.emplace_back(msg);
+  }
+  std::vector<std::string> messages_;
+};
 
 void CheckNorthUp(const std::array<double, 6>& gt, const std::string& what) {
   SATMESH_CHECK(gt[2] == 0.0 && gt[4] == 0.0, ErrorCode::kInvalidInput,
@@ -161,6 +187,7 @@ void WriteDsm(const std::string& path, const Dsm& dsm) {
                     std::to_string(dsm.height) + " grid");
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
   SATMESH_CHECK(driver != nullptr, ErrorCode::kInternal, "GDAL GTiff driver missing");
+  GdalErrorCollector errors;
   CPLStringList options;
   options.SetNameValue("TILED", "YES");
   options.SetNameValue("COMPRESS", "DEFLATE");
@@ -184,7 +211,8 @@ void WriteDsm(const std::string& path, const Dsm& dsm) {
     ok = CPLGetLastErrorType() < CE_Failure;
   }
   if (!ok) {  // a full disk is kNoSpace (the server waits for space), anything else kIo
-    const std::string message = "writing DSM " + path + " failed" + LastGdalError();
+    ds.reset();  // closing writes the directory: its errors are part of the story
+    const std::string message = "writing DSM " + path + " failed" + errors.Joined();
     ThrowError(WriteErrorCode(message), message);
   }
 }
