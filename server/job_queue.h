@@ -23,6 +23,9 @@ struct SchedulerStats {
   int workers_seen = -1;                     // Redis queue: workers seen in the last minute; -1: n/a
 };
 
+// A new job's id: 16 random hex digits (the embedded scheduler and the Redis API nodes).
+std::string NewJobId();
+
 // The job's message once every tile finished (done or failed): "" when a tile is done
 // (the job is assembled), else why it failed (every tile failed, the first named).
 std::string NoTileDoneMessage(const JobRecord& job);

@@ -19,14 +19,6 @@ namespace {
 // not read a destroyed vector (ASan, fuzz_http).
 constexpr std::array<double, 12> kDurationBuckets = {0.1, 0.5, 1, 2, 5, 10, 30, 60, 120, 300, 600, 1800};
 
-std::string NewJobId() {
-  std::random_device rd;
-  std::mt19937_64 gen((uint64_t(rd()) << 32) ^ rd());
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(gen()));
-  return buf;
-}
-
 // Every tile finished: done or failed (the failure policy of core/tiling/job.h).
 bool AllFinished(const JobRecord& r) {
   return std::all_of(r.tiles.begin(), r.tiles.end(), [](const TileRecord& t) {
@@ -35,6 +27,14 @@ bool AllFinished(const JobRecord& r) {
 }
 
 }  // namespace
+
+std::string NewJobId() {
+  std::random_device rd;
+  std::mt19937_64 gen((uint64_t(rd()) << 32) ^ rd());
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(gen()));
+  return buf;
+}
 
 std::string NoTileDoneMessage(const JobRecord& r) {
   for (const TileRecord& t : r.tiles)
