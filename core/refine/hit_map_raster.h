@@ -8,7 +8,7 @@
 // kept in float, < 2.5e-4 px more below 4096 px); the depth order is the distance along
 // the view's mean ray (rays of one view are parallel to < 1e-3 rad over a tile). With
 // AVX2, faces are set up 8 at a time and those with at most 2 x 2 pixel centres (nearly
-// all) are tested without branches (BENCHMARKS.md, session 5).
+// all) are tested without branches (docs/benchmarks-history.md, session 5).
 #include <vector>
 
 #include "core/mesh/mesh.h"
@@ -58,7 +58,8 @@ void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
 // coordinates, and its hit point, ray parameter and ray cosine (when face_normals is not
 // null) follow the mesh's moved vertices. A vertex moves by at most max_step_gsd (0.5
 // level pixels) an iteration, typically a tenth of that, so a pixel's point leaves its ray
-// by a fraction of that move (RefineOptions::hit_maps_every; BENCHMARKS.md, session 8).
+// by a fraction of that move (RefineOptions::hit_maps_every; docs/benchmarks-history.md,
+// session 8).
 void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
                    HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals);
 

@@ -34,7 +34,7 @@ namespace satmesh {
 
 // Lane loads without vgatherdps: with the gather-data-sampling microcode (Skylake to
 // Ice Lake servers, this project's benchmark machine) one 8-lane gather costs ~28 cycles,
-// 8 scalar loads and inserts ~10 (BENCHMARKS.md, session 5). Lanes off the mask read
+// 8 scalar loads and inserts ~10 (docs/benchmarks-history.md, session 5). Lanes off the mask read
 // base[0] and give 0.
 SATMESH_AVX2 inline void LaneIndices(__m256i index, __m256 mask, int* out) {
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(out),

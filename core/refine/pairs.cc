@@ -34,7 +34,7 @@ struct Components {
 
 // Number of pairs the selection aims for: the user's cap, else 1.5 per view (at least 10
 // where that many candidates exist): what keeps a 26-view tile near the cost of the
-// pairs a 5-13 degree rule found there (BENCHMARKS.md, session 9).
+// pairs a 5-13 degree rule found there (docs/benchmarks-history.md, session 9).
 int PairBudget(int num_usable, const PairOptions& o) {
   if (o.max_pairs > 0) return o.max_pairs;
   return std::max(10, int(std::ceil(1.5 * num_usable)));

@@ -31,24 +31,25 @@ namespace {
 // surface's by more than this, about what meshing the same surface differently changes (a
 // DSM's grid mesh vs its remeshed version: 0.0004-0.0007 on the Pléiades triplet). Within
 // that, the two explain the images equally well and the initial surface, the user's data
-// at full resolution, is kept (BENCHMARKS.md, session 7: on Pléiades the coarse levels of
-// a narrow pair drift by 0.5 m where they tie with s2p's DSM).
+// at full resolution, is kept (docs/benchmarks-history.md, session 7: on Pléiades the
+// coarse levels of a narrow pair drift by 0.5 m where they tie with s2p's DSM).
 constexpr double kKeepMargin = 0.001;
 
 // Once a level's result beats the initial surface by more than this, the finer levels
 // no longer measure the initial surface (one photometric pass over a mesh with twice the
 // level's faces, ~9% of a large tile's time): a chain that wins clearly keeps winning at
 // the finer levels (synthetic scenes: 0.019-0.026 at level 1, then 0.037-0.071 at level
-// 0; large with levels 3: 0.013, 0.008, 0.009; BENCHMARKS.md, session 8), while a DSM as
-// sharp as the images ties with it (Pléiades: < 0.001).
+// 0; large with levels 3: 0.013, 0.008, 0.009; docs/benchmarks-history.md, session 8),
+// while a DSM as sharp as the images ties with it (Pléiades: < 0.001).
 constexpr double kSkipCheckMargin = 0.01;
 
 // At the coarsest level (initial_sigma_gsd > 0), each iteration moves a vertex back
 // towards its start by this fraction of its offset times its InitialPriorWeights weight:
 // a vertex the images do not see returns most of the way within ~20 iterations, and the
 // low-frequency drift a single weakly textured pair produces is bounded instead of
-// growing with the iterations (BENCHMARKS.md, session 13: stereo 0.5 m roofs 0.92x of the
-// initial with 40 iterations and no pull, 0.78x with it; 0.05-0.2 give the same).
+// growing with the iterations (docs/benchmarks-history.md, session 13: stereo 0.5 m roofs
+// 0.92x of the initial with 40 iterations and no pull, 0.78x with it; 0.05-0.2 give the
+// same).
 constexpr double kInitialPullPerIteration = 0.1;
 
 using Clock = std::chrono::steady_clock;
@@ -363,8 +364,8 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 
 // Step 4: coarse to fine. Below the coarsest level, the previous level's result
 // (subdivided) competes with the initial surface: a DSM as sharp as the images loses
-// detail on the coarse levels that their iterations do not win back (BENCHMARKS.md,
-// Pléiades).
+// detail on the coarse levels that their iterations do not win back
+// (docs/benchmarks-history.md, Pléiades run 5).
 void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   const Progress& progress, const std::vector<PreparedView>& views,
                   RefineResult* result) {

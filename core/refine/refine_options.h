@@ -1,6 +1,6 @@
 #pragma once
 // Options of the refinement (DESIGN.md "The method"). Defaults were tuned on synthetic
-// scenes from `satmesh synth` (see BENCHMARKS.md for the runs that chose them). Each
+// scenes from `satmesh synth` (see BENCHMARKS.md, "Why each default is what it is"). Each
 // option's wire name, valid range and one-line help: RefineOptionTable() (refine_options.cc);
 // the comments here say what the fields mean and their units.
 #include <string>
@@ -61,8 +61,9 @@ struct RefineOptions {
   double flat_tolerance_gsd = 1.0;  // between levels only faces near a vertex off the plane
                                    // of its neighbours by more than this (GSD of the level
                                    // just finished) are subdivided; planar parts keep the
-                                   // coarser triangles (mesh_resolution.h; BENCHMARKS.md,
-                                   // session 12); 0: all faces (the paper)
+                                   // coarser triangles (mesh_resolution.h;
+                                   // docs/benchmarks-history.md, session 12); 0: all
+                                   // faces (the paper)
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous

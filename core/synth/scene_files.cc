@@ -151,7 +151,7 @@ void WriteJobJson(const std::string& path, const SynthOptions& o, const SynthRes
   s << "  ],\n  \"initial\": {\"dsm\": \"initial/dsm.tif\"},\n  \"outputs\": {\"crs\": \"" << o.crs
     << "\"}";
   // The RPCs are exact unless a bias was injected: estimating one over the (degraded)
-  // initial surface would only add its ~0.1 px noise (BENCHMARKS.md).
+  // initial surface would only add its ~0.1 px noise (docs/benchmarks-history.md, Run 3).
   if (o.rpc_bias_sigma_px == 0) s << ",\n  \"options\": {\"estimate_bias\": false}";
   s << "\n}\n";
   std::ofstream f(path);

@@ -3,7 +3,7 @@
 // worker may use. A tile's peak is dominated by its views' per-level workspaces
 // (pyramids, ray directions, hit maps, warps, ZNCC fields), which grow with the image
 // windows it reads: a fixed part plus a number of bytes per full-resolution window pixel
-// (measured: BENCHMARKS.md, "Memory budget"), plus the initial surface's cells.
+// (measured: docs/benchmarks-history.md, "Memory budget"), plus the initial surface's cells.
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,7 +15,7 @@
 
 namespace satmesh {
 
-// The model's constants (see BENCHMARKS.md, "Memory budget", for the measurements).
+// The model's constants (see docs/benchmarks-history.md, "Memory budget", for the measurements).
 constexpr double kBaseMb = 150;                 // process, GDAL, Embree, fixed buffers
 constexpr double kBytesPerWindowPixel = 64;     // all levels' workspaces per full-res pixel
 constexpr double kBytesPerDsmCell = 320;        // the meshes of each level per DSM cell
