@@ -1,0 +1,147 @@
+#include "core/refine/coarse_mesh.h"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+
+#include "tests/core/mesh/mesh_fixtures.h"
+
+namespace satmesh {
+namespace {
+
+constexpr int kCells = 160;      // 80 m at 0.5 m
+constexpr float kCell = 0.5f;
+
+// A DSM-like grid mesh of a small city: 0.5 m cells, 14 buildings of 4-20 m with
+// vertical steps, placed at random (so that block borders cross their walls).
+TriangleMesh City(std::vector<float>* heights) {
+  TriangleMesh mesh = testing::CreateGridMesh(kCells, kCell);
+  heights->assign(mesh.vertices.size(), 0.f);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> pos(2.f, 70.f), size(4.f, 14.f), height(4.f, 20.f);
+  for (int b = 0; b < 14; ++b) {
+    const float x0 = pos(rng), y0 = pos(rng), w = size(rng), d = size(rng), h = height(rng);
+    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+      auto& v = mesh.vertices[i];
+      if (v.x() >= x0 && v.x() <= x0 + w && v.y() >= y0 && v.y() <= y0 + d) v.z() = std::max(v.z(), h);
+    }
+  }
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) (*heights)[i] = mesh.vertices[i].z();
+  return mesh;
+}
+
+struct MeshStats {
+  size_t interior_border_edges = 0;  // border edges off the outer box: cracks
+  size_t border_edges = 0;
+  size_t nonmanifold_edges = 0;
+  double area = 0;
+  float edge_p50 = 0, edge_p90 = 0;
+  size_t off_surface = 0;  // vertices outside the input's height range around them
+  float worst_off_m = 0;
+};
+
+MeshStats Measure(const TriangleMesh& m, const std::vector<float>& heights) {
+  MeshStats s;
+  std::map<std::pair<int, int>, int> count;
+  for (const auto& f : m.faces) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      ++count[{std::min(a, b), std::max(a, b)}];
+    }
+    s.area += 0.5 * (m.vertices[f[1]] - m.vertices[f[0]]).cross(m.vertices[f[2]] - m.vertices[f[0]]).norm();
+  }
+  const float side = kCells * kCell;
+  auto on_box = [&](const Eigen::Vector3f& p) {
+    return p.x() < 1e-3f || p.y() < 1e-3f || p.x() > side - 1e-3f || p.y() > side - 1e-3f;
+  };
+  std::vector<float> lengths;
+  for (const auto& [e, c] : count) {
+    lengths.push_back((m.vertices[e.first] - m.vertices[e.second]).norm());
+    if (c > 2) ++s.nonmanifold_edges;
+    if (c == 1) {
+      ++s.border_edges;
+      if (!on_box(m.vertices[e.first]) || !on_box(m.vertices[e.second])) ++s.interior_border_edges;
+    }
+  }
+  std::sort(lengths.begin(), lengths.end());
+  s.edge_p50 = lengths[lengths.size() / 2];
+  s.edge_p90 = lengths[lengths.size() * 9 / 10];
+  // On the input surface: a vertex's height lies within the heights of the grid nodes
+  // around it (a wall spans its two cells' heights).
+  for (const auto& p : m.vertices) {
+    const int c0 = std::clamp(int(std::floor(p.x() / kCell)) - 1, 0, kCells);
+    const int r0 = std::clamp(int(std::floor(p.y() / kCell)) - 1, 0, kCells);
+    float lo = 1e30f, hi = -1e30f;
+    for (int r = r0; r <= std::min(r0 + 3, kCells); ++r)
+      for (int c = c0; c <= std::min(c0 + 3, kCells); ++c) {
+        lo = std::min(lo, heights[r * (kCells + 1) + c]);
+        hi = std::max(hi, heights[r * (kCells + 1) + c]);
+      }
+    const float off = std::max(lo - p.z(), p.z() - hi);
+    s.worst_off_m = std::max(s.worst_off_m, off);
+    if (off > 1e-3f) ++s.off_surface;
+  }
+  return s;
+}
+
+TEST(RemeshIsotropic, BlocksJoinWithoutCracksAndMatchTheOnePieceResult) {
+  std::vector<float> heights;
+  const TriangleMesh city = City(&heights);  // 51,200 faces
+  CoarseMeshOptions one_piece;
+  one_piece.target_edge_m = 1.0;
+  one_piece.faces_per_block = 1'000'000;
+  CoarseMeshOptions blocks = one_piece;
+  blocks.faces_per_block = 3000;  // 17 blocks, borders across walls
+
+  const MeshStats a = Measure(RemeshIsotropic(city, one_piece), heights);
+  const MeshStats b = Measure(RemeshIsotropic(city, blocks), heights);
+  for (const MeshStats* s : {&a, &b}) {
+    EXPECT_EQ(s->interior_border_edges, 0u);
+    EXPECT_EQ(s->nonmanifold_edges, 0u);
+    // CGAL's relaxation leaves some vertices near roof edges a little off the input.
+    EXPECT_LT(s->worst_off_m, 0.2f);
+    EXPECT_LT(s->off_surface, city.vertices.size() / 50);
+    EXPECT_GT(s->edge_p50, 0.8f);  // the target edge, on roofs, streets and walls
+    EXPECT_LT(s->edge_p50, 1.15f);
+    EXPECT_LT(s->edge_p90, 1.35f);
+  }
+  // The blocks leave no trace: the same area (walls included), edges and outer border.
+  EXPECT_NEAR(b.area, a.area, 0.002 * a.area);
+  EXPECT_LE(b.off_surface, a.off_surface * 6 / 5 + 10);
+  EXPECT_NEAR(b.edge_p50, a.edge_p50, 0.02f);
+  EXPECT_NEAR(b.edge_p90, a.edge_p90, 0.03f);
+  EXPECT_NEAR(double(b.border_edges), double(a.border_edges), 0.03 * a.border_edges);
+}
+
+TEST(RemeshIsotropic, TheResultDoesNotDependOnTheNumberOfThreads) {
+  std::vector<float> heights;
+  const TriangleMesh city = City(&heights);
+  CoarseMeshOptions options;
+  options.target_edge_m = 1.0;
+  options.faces_per_block = 3000;
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const TriangleMesh one = RemeshIsotropic(city, options);
+  omp_set_num_threads(std::max(2, threads));
+  const TriangleMesh many = RemeshIsotropic(city, options);
+  omp_set_num_threads(threads);
+  ASSERT_EQ(one.vertices.size(), many.vertices.size());
+  ASSERT_EQ(one.faces, many.faces);
+  EXPECT_EQ(one.vertices, many.vertices);
+}
+
+TEST(RemeshIsotropic, RejectsBadOptionsAndEmptyMeshes) {
+  const TriangleMesh grid = testing::CreateGridMesh(4, 1.f);
+  CoarseMeshOptions bad;
+  bad.faces_per_block = 10;
+  EXPECT_THROW(RemeshIsotropic(grid, bad), Error);
+  EXPECT_THROW(RemeshIsotropic(TriangleMesh{}, CoarseMeshOptions{}), Error);
+}
+
+}  // namespace
+}  // namespace satmesh
