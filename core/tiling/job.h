@@ -46,14 +46,15 @@ struct JobOutputs {
   double peak_rss_mb = 0;          // process peak resident memory at the end
 };
 
-// The job's per-image RPC biases, estimated once over the planned tile nearest the AOI's
-// centre (which fits the memory budget like every tile), in spec.images order, added to
+// The job's per-image RPC biases, estimated once over the middle (at most 800 x 800 DSM
+// cells) of the planned tile nearest the AOI's centre (which fits the memory budget like
+// every tile), in spec.images order, added to
 // the spec's biases; an image that tile does not see keeps its bias. Throws like RunTile
 // for that tile (Error; kCancelled when cancelled).
 std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPlan& plan,
                                                int* tile_index, const Progress& progress = {});
 
-// Step 1b: the job's biases, estimated once over the central tile (EstimateJobBiases).
+// Step 1b: the job's biases, estimated once over the central tile's middle (EstimateJobBiases).
 struct JobBiases {
   std::vector<Eigen::Vector2d> bias_px;  // spec.images order; empty: each tile estimates its own
   std::string tile;                      // the tile they were estimated over
