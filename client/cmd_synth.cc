@@ -17,7 +17,8 @@ int RunSynth(const std::vector<std::string>& argv) {
     std::printf(
         "usage: satmesh synth --out DIR [--preset small|default|large] [--seed N]\n"
         "                     [--views stereo|tristereo|multidate|jax] [--num-views N]\n"
-        "                     [--gsd M] [--rpc-bias-px SIGMA] [--no-trees] [--no-preview]\n"
+        "                     [--gsd M] [--size-m M] [--rpc-bias-px SIGMA] [--no-trees]\n"
+        "                     [--no-preview]\n"
         "Writes images/*.tif (UInt16, RPC, IMD acquisition metadata), truth/, initial/dsm.tif,\n"
         "scene.json, job.json, preview.png.\n"
         "  --preset P       scene size: small (72 m, for tests), default (300 m), large (750 m)\n"
@@ -32,6 +33,7 @@ int RunSynth(const std::vector<std::string>& argv) {
         "                     jax        multidate with 26 views (the JAX-like archive)\n"
         "  --num-views N    number of passes of multidate/jax, [2, 64]\n"
         "  --gsd M          ground sample distance and grid cell, m (e.g. 0.3, 0.5; default 0.3)\n"
+        "  --size-m M       side of the square AOI, m (default: the preset's)\n"
         "  --rpc-bias-px S  per-image RPC bias sigma, px (default: 1 for multidate/jax, 0 for one pass)\n");
     return kExitOk;
   }
@@ -55,6 +57,7 @@ int RunSynth(const std::vector<std::string>& argv) {
     options.views.num_views = args.GetInt("num-views", options.views.num_views);
   }
   options.gsd_m = args.GetDouble("gsd", options.gsd_m);
+  options.city.aoi_size_m = args.GetDouble("size-m", options.city.aoi_size_m);
   options.rpc_bias_sigma_px = args.GetDouble("rpc-bias-px", options.rpc_bias_sigma_px);
   if (args.Has("no-trees")) options.city.trees = false;
   if (args.Has("no-preview")) options.write_preview = false;
