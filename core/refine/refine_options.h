@@ -33,7 +33,7 @@ struct RefineOptions {
                                    // max(this, the initial surface's cell), so that a coarse
                                    // start does not smooth away walls and structures of
                                    // twice this size
-  int iterations_per_level = 20;   // gradient steps per level
+  int iterations_per_level = 25;   // gradient steps per level (docs/benchmarks-history.md, session 14)
   double coarsest_iterations_factor = 2.0;  // the coarsest level, which starts from the
                                            // initial surface, takes this x
                                            // iterations_per_level gradient steps
