@@ -21,6 +21,23 @@ using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using SurfaceMesh = CGAL::Surface_mesh<Kernel::Point_3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
+// Removes the vertices no face uses and compacts the mesh (property maps are kept).
+void DropIsolatedVertices(SurfaceMesh* sm) {
+  for (auto v : sm->vertices())
+    if (sm->is_isolated(v)) sm->remove_vertex(v);
+  sm->collect_garbage();
+}
+
+// An edge property map with the mesh's border edges set: what the remeshing keeps.
+SurfaceMesh::Property_map<SurfaceMesh::Edge_index, bool> ConstrainBorder(SurfaceMesh* sm) {
+  auto is_constrained =
+      sm->add_property_map<SurfaceMesh::Edge_index, bool>("e:is_constrained", false).first;
+  std::vector<SurfaceMesh::Halfedge_index> border;
+  PMP::border_halfedges(faces(*sm), *sm, std::back_inserter(border));
+  for (auto h : border) is_constrained[edge(h, *sm)] = true;
+  return is_constrained;
+}
+
 SurfaceMesh ToSurfaceMesh(const TriangleMesh& mesh, size_t* dropped) {
   SurfaceMesh out;
   std::vector<SurfaceMesh::Vertex_index> index(mesh.vertices.size());
@@ -34,11 +51,7 @@ SurfaceMesh ToSurfaceMesh(const TriangleMesh& mesh, size_t* dropped) {
       ++*dropped;
     }
   }
-  // Drop vertices no face uses.
-  for (auto v : out.vertices()) {
-    if (out.is_isolated(v)) out.remove_vertex(v);
-  }
-  out.collect_garbage();
+  DropIsolatedVertices(&out);
   return out;
 }
 
@@ -205,16 +218,9 @@ BlockResult RemeshBlock(const TriangleMesh& mesh, const std::vector<int>& face_i
     const auto a = vertex(t[0]), b = vertex(t[1]), c = vertex(t[2]);
     if (out.sm.add_face(a, b, c) == SurfaceMesh::null_face()) out.kept.push_back(t);
   }
-  for (auto v : out.sm.vertices())
-    if (out.sm.is_isolated(v)) out.sm.remove_vertex(v);
-  out.sm.collect_garbage();
-  auto is_constrained =
-      out.sm.add_property_map<SurfaceMesh::Edge_index, bool>("e:is_constrained", false).first;
-  std::vector<SurfaceMesh::Halfedge_index> border;
-  PMP::border_halfedges(faces(out.sm), out.sm, std::back_inserter(border));
-  for (auto h : border) is_constrained[edge(h, out.sm)] = true;
+  DropIsolatedVertices(&out.sm);
   if (out.sm.number_of_faces() > 0)
-    RemeshInPlace(options, is_constrained, /*protect=*/true, cancelled, &out.sm);
+    RemeshInPlace(options, ConstrainBorder(&out.sm), /*protect=*/true, cancelled, &out.sm);
   out.sm.collect_garbage();
   out.global.assign(out.sm.number_of_vertices(), -1);
   // Interior input vertices were moved: only the (protected) border's are shared.
@@ -231,13 +237,8 @@ SurfaceMesh RemeshWhole(const TriangleMesh& mesh, const CoarseMeshOptions& optio
   if (dropped > 0) spdlog::debug("remesh: dropped {} non-manifold faces", dropped);
   SATMESH_CHECK(sm.number_of_faces() > 0, ErrorCode::kInvalidInput,
                 "remesh: the initial mesh has no usable (manifold) face");
-  auto is_constrained =
-      sm.add_property_map<SurfaceMesh::Edge_index, bool>("e:is_constrained", false).first;
-  std::vector<SurfaceMesh::Halfedge_index> border;
-  PMP::border_halfedges(faces(sm), sm, std::back_inserter(border));
-  for (auto h : border) is_constrained[edge(h, sm)] = true;
-  RemeshInPlace(options, is_constrained, /*protect=*/false, [&] { return progress.Cancelled(); },
-                &sm);
+  RemeshInPlace(options, ConstrainBorder(&sm), /*protect=*/false,
+                [&] { return progress.Cancelled(); }, &sm);
   progress.ThrowIfCancelled();
   return sm;
 }
@@ -298,9 +299,7 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
     r = BlockResult{};
   }
   if (dropped > 0) spdlog::debug("remesh: dropped {} non-manifold faces", dropped);
-  for (auto v : sm.vertices())
-    if (sm.is_isolated(v)) sm.remove_vertex(v);
-  sm.collect_garbage();
+  DropIsolatedVertices(&sm);
   SATMESH_CHECK(sm.number_of_faces() > 0, ErrorCode::kInvalidInput,
                 "remesh: the initial mesh has no usable (manifold) face");
 
@@ -326,11 +325,7 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
   std::vector<SurfaceMesh::Face_index> band;
   for (auto f : sm.faces())
     if (in_band[uint32_t(f)]) band.push_back(f);
-  auto is_constrained =
-      sm.add_property_map<SurfaceMesh::Edge_index, bool>("e:is_constrained", false).first;
-  std::vector<SurfaceMesh::Halfedge_index> border;
-  PMP::border_halfedges(faces(sm), sm, std::back_inserter(border));
-  for (auto h : border) is_constrained[edge(h, sm)] = true;
+  const auto is_constrained = ConstrainBorder(&sm);
   spdlog::debug("remesh: {} blocks, band of {} faces", num_blocks, band.size());
   // The band in one call: its face range does not survive an iteration.
   if (!band.empty())

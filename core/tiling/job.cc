@@ -83,11 +83,7 @@ std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPla
                                                int* tile_index, const Progress& progress) {
   SATMESH_CHECK(!plan.tiles.empty(), ErrorCode::kInvalidArgument, "bias: the plan has no tile");
   *tile_index = CentralTile(plan);
-  JobPlan window_plan;  // the central tile's middle, as a plan of one tile
-  window_plan.dsm = plan.dsm;
-  window_plan.output_crs = plan.output_crs;
-  window_plan.mesh_zmin = plan.mesh_zmin;
-  window_plan.mesh_zmax = plan.mesh_zmax;
+  JobPlan window_plan = plan;  // the central tile's middle, as a plan of one tile
   window_plan.tiles = {BiasWindow(plan, plan.tiles[*tile_index])};
   const TileInput input = PrepareTileInput(spec, window_plan, 0);
   BiasOptions options;
