@@ -17,6 +17,8 @@
 # (netavark, runc, lower rlimits: docker/README.md).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
+# shellcheck source=lib/compose-smoke.sh
+source "$here/scripts/lib/compose-smoke.sh"
 
 tag="localhost/satmesh:latest"              # the satmesh image (API node and workers)
 redis_tag="localhost/satmesh-redis:latest"  # the Redis image (docker/redis.Dockerfile)
@@ -120,19 +122,10 @@ for image in "$tag" "$redis_tag"; do
   podman image exists "$image" || fail "no image $image (run scripts/build-image.sh)"
 done
 cli() { podman run --rm --no-healthcheck --network host -e SATMESH_TOKEN -v "$work/inputs:/inputs" --entrypoint satmesh "$tag" "$@"; }
-out=$(podman run --rm --no-healthcheck --entrypoint true "$tag" 2>&1) \
-  || fail "podman cannot run a container here: $out (see docker/README.md, CONTAINERS_CONF)"
-curl -s -o /dev/null "$url/health" && fail "port $port is already in use"
+compose_smoke_preflight
 [ -z "$(containers)" ] || fail "compose project $project has containers already: $(containers | tr '\n' ' ')"
 
-cli synth --preset small --out /inputs >"$work/synth.log" 2>&1 || { cat "$work/synth.log" >&2; fail "satmesh synth"; }
-up=1
-compose up -d --no-build >"$work/up.log" 2>&1 || { cat "$work/up.log" >&2; fail "podman-compose up"; }
-for _ in $(seq 100); do
-  curl -fsS -o /dev/null "$url/health" 2>/dev/null && break
-  sleep 0.3
-done
-health=$(curl -fsS "$url/health") || fail "GET /health of the API node"
+compose_smoke_up_with_small_scene
 echo "smoke-compose-queue: up in $((SECONDS - t0)) s: $(containers | tr '\n' ' '); GET /health -> $health"
 aof=$(podman exec "${project}_redis_1" redis-cli config get appendonly | tail -1)
 [ "$aof" = yes ] || fail "redis: appendonly is '$aof', not yes"

@@ -11,6 +11,8 @@
 # docker/README.md: a sandbox without CAP_SYS_RESOURCE and with hybrid cgroups).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
+# shellcheck source=lib/compose-smoke.sh
+source "$here/scripts/lib/compose-smoke.sh"
 
 tag="localhost/satmesh:latest"  # image to run (compose.yaml names it satmesh:latest)
 port=18081                      # loopback port of the stack
@@ -73,18 +75,9 @@ podman image exists "$tag" || fail "no image $tag (run scripts/build-image.sh)"
 # compose.yaml names the image satmesh:latest; podman resolves it to localhost/satmesh:latest.
 [ "$tag" = localhost/satmesh:latest ] || podman tag "$tag" localhost/satmesh:latest
 cli() { podman run --rm --no-healthcheck --network host -e SATMESH_TOKEN -v "$work/inputs:/inputs" --entrypoint satmesh "$tag" "$@"; }
-out=$(podman run --rm --no-healthcheck --entrypoint true "$tag" 2>&1) \
-  || fail "podman cannot run a container here: $out (see docker/README.md, CONTAINERS_CONF)"
-curl -s -o /dev/null "$url/health" && fail "port $port is already in use"
+compose_smoke_preflight
 
-cli synth --preset small --out /inputs >"$work/synth.log" 2>&1 || { cat "$work/synth.log" >&2; fail "satmesh synth"; }
-up=1
-compose up -d --no-build >"$work/up.log" 2>&1 || { cat "$work/up.log" >&2; fail "podman-compose up"; }
-for _ in $(seq 100); do
-  curl -fsS -o /dev/null "$url/health" 2>/dev/null && break
-  sleep 0.3
-done
-health=$(curl -fsS "$url/health") || fail "GET /health"
+compose_smoke_up_with_small_scene
 echo "smoke-compose: GET /health -> $health"
 code=$(curl -s -o /dev/null -w '%{http_code}' "$url/processes")
 [ "$code" = 401 ] || fail "GET /processes without the token answered $code, not 401: the token did not reach the server"

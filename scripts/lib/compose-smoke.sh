@@ -1,0 +1,26 @@
+# Shared by scripts/smoke-compose.sh and scripts/smoke-compose-queue.sh (sourced, not run).
+# The caller defines: cli (the image's satmesh CLI with the inputs folder at /inputs),
+# compose (podman-compose of its project), fail (message, exit 1), url (the API node),
+# work (scratch folder), up (0 until the stack is up).
+
+# Checks that podman runs the image and that the port is free; else fails naming why.
+compose_smoke_preflight() {
+  local out
+  out=$(podman run --rm --no-healthcheck --entrypoint true "$tag" 2>&1) \
+    || fail "podman cannot run a container here: $out (see docker/README.md, CONTAINERS_CONF)"
+  curl -s -o /dev/null "$url/health" && fail "port ${url##*:} is already in use"
+  return 0
+}
+
+# Writes the small synthetic scene into the inputs folder with the image's CLI, brings the
+# stack up and waits for GET /health (30 s at most); its answer is left in $health.
+compose_smoke_up_with_small_scene() {
+  cli synth --preset small --out /inputs >"$work/synth.log" 2>&1 || { cat "$work/synth.log" >&2; fail "satmesh synth"; }
+  up=1
+  compose up -d --no-build >"$work/up.log" 2>&1 || { cat "$work/up.log" >&2; fail "podman-compose up"; }
+  for _ in $(seq 100); do
+    curl -fsS -o /dev/null "$url/health" 2>/dev/null && break
+    sleep 0.3
+  done
+  health=$(curl -fsS "$url/health") || fail "GET /health of the API node"
+}
