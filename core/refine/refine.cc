@@ -43,13 +43,20 @@ constexpr double kKeepMargin = 0.001;
 // while a DSM as sharp as the images ties with it (Pléiades: < 0.001).
 constexpr double kSkipCheckMargin = 0.01;
 
-// At the coarsest level (initial_sigma_gsd > 0), each iteration moves a vertex back
-// towards its start by this fraction of its offset times its InitialPriorWeights weight:
+// At every level (initial_sigma_gsd > 0), each iteration moves a vertex back towards where
+// the level started it by this fraction of its offset times its InitialPriorWeights weight:
 // a vertex the images do not see returns most of the way within ~20 iterations, and the
 // low-frequency drift a single weakly textured pair produces is bounded instead of
 // growing with the iterations (docs/benchmarks-history.md, session 13: stereo 0.5 m roofs
 // 0.92x of the initial with 40 iterations and no pull, 0.78x with it; 0.05-0.2 give the
-// same).
+// same). Below the coarsest level the start is the coarser level's result (or the initial
+// surface after a restart), and only its height pulls: a vertex the finer images constrain
+// weakly keeps the height the coarser level found instead of following their matching
+// noise, while walls stay free to move sideways, which is what the finer level is for
+// (docs/benchmarks-history.md, session 15: refined from the true surface, tri-stereo 0.3 m
+// roofs drift to 0.107 m NMAD with the pull at the coarsest level only, 0.073 m with it at
+// every level; from the DSM, 0.3 m roofs 0-4% better, facades within 0.3 points; pulling
+// in 3D below the coarsest level cost 0.3-0.5 points of facades).
 constexpr double kInitialPullPerIteration = 0.1;
 
 using Clock = std::chrono::steady_clock;
@@ -206,10 +213,12 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   std::vector<double> information;
   std::vector<float> confidence;
   const bool data_confidence = opt.height_sigma_gsd > 0 && opt.min_height_confidence < 1;
-  // The coarsest level starts from the initial surface and keeps weakly constrained
-  // vertices near it (InitialPriorWeights); finer levels start from an image-derived one.
+  // Every level keeps weakly constrained vertices near where it started them
+  // (InitialPriorWeights, kInitialPullPerIteration): the coarsest level near the initial
+  // surface, finer ones at the heights of the coarser level's result (or of the initial
+  // surface after a restart).
   const bool coarsest = level == opt.levels;
-  const bool initial_prior = coarsest && opt.initial_sigma_gsd > 0;
+  const bool initial_prior = opt.initial_sigma_gsd > 0;
   const std::vector<Eigen::Vector3f> start = initial_prior ? mesh->vertices
                                                            : std::vector<Eigen::Vector3f>{};
   std::vector<float> prior_weight;
@@ -281,9 +290,11 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
               ? double(confidence_of[v])
               : HeightConfidence(seen[v] / directions_per_pair * ctx.mean_pair_information, opt);
       Eigen::Vector3d move = -photo_scale * g - smooth_scale / confidence * u2[v].cast<double>();
-      if (initial_prior)
-        move -= kInitialPullPerIteration * double(prior_weight[v]) *
-                (mesh->vertices[v] - start[v]).cast<double>();
+      if (initial_prior) {
+        Eigen::Vector3d off = (mesh->vertices[v] - start[v]).cast<double>();
+        if (!coarsest) off.x() = off.y() = 0;  // finer levels: heights only (kInitialPull...)
+        move -= kInitialPullPerIteration * double(prior_weight[v]) * off;
+      }
       if (opt.hold_boundary_xy && adjacency.is_boundary[v]) move.x() = move.y() = 0;
       const double len = move.norm();
       if (len > max_move) move *= max_move / len;

@@ -88,11 +88,14 @@ struct RefineOptions {
                                    // (1 sigma), falling as (this / sigma)² to
                                    // min_height_confidence; 0: from the pairs' geometry
                                    // only (HeightConfidence)
-  double initial_sigma_gsd = 1.5;  // > 0: at the coarsest level each vertex is pulled back
-                                   // towards the initial surface in proportion to how
+  double initial_sigma_gsd = 1.5;  // > 0: each vertex is pulled back towards where the
+                                   // level started it (at the coarsest level towards the
+                                   // initial surface; below it, in height only, towards the
+                                   // coarser level's result or the initial surface after a
+                                   // restart) in proportion to how
                                    // little the images constrain it (InitialPriorWeights:
                                    // sigma_img² / (sigma_img² + this²), this in level GSD,
-                                   // the initial surface's assumed 1-sigma error); 0: off
+                                   // the start's assumed 1-sigma error); 0: off
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing

@@ -314,5 +314,36 @@ TEST(Refine, InitialPriorKeepsWeaklyConstrainedVerticesNearTheStart) {
   EXPECT_LT(mean_error[1], 0.25);  // 0.5 GSD
 }
 
+// The same plane refined with a coarser level first: the finer level, too, keeps weakly
+// constrained vertices near where it started them (the coarser level's result) instead of
+// following its matching noise for 30 iterations.
+TEST(Refine, TheFinerLevelAlsoKeepsWeaklyConstrainedVerticesNearItsStart) {
+  const testing::Plane plane;
+  auto input = testing::MakePlaneInput(plane, {{8, 10}, {8, 190}},
+                                       testing::PlaneMesh(plane, 40, 1.0, 0.0));
+  uint32_t state = 777;
+  for (auto& view : input.views) {
+    float mean = 0;
+    for (float px : view.image.pixels) mean += px;
+    mean /= float(view.image.pixels.size());
+    for (float& px : view.image.pixels) {
+      state = state * 1664525u + 1013904223u;
+      px = mean + 0.05f * (px - mean) + 60.f * (float(state >> 8) / float(1 << 24) - 0.5f);
+    }
+  }
+  RefineOptions options = SmallOptions();
+  options.levels = 1;
+  options.iterations_per_level = 30;
+  options.coarsest_iterations_factor = 1;  // 30 at each level
+  std::vector<double> mean_error;
+  for (const double prior : {0.0, 1.5}) {
+    options.initial_sigma_gsd = prior;
+    const RefineResult result = Refine(input, options);
+    mean_error.push_back(PlaneError(result.mesh, plane, 30).first);
+  }
+  EXPECT_LT(mean_error[1], 0.7 * mean_error[0]) << "without: " << mean_error[0]
+                                                 << " m, with: " << mean_error[1] << " m";
+}
+
 }  // namespace
 }  // namespace satmesh
