@@ -292,7 +292,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       Eigen::Vector3d move = -photo_scale * g - smooth_scale / confidence * u2[v].cast<double>();
       if (initial_prior) {
         Eigen::Vector3d off = (mesh->vertices[v] - start[v]).cast<double>();
-        if (!coarsest) off.x() = off.y() = 0;  // finer levels: heights only (kInitialPull...)
+        if (!coarsest) off.x() = off.y() = 0;  // below the coarsest: heights only
         move -= kInitialPullPerIteration * double(prior_weight[v]) * off;
       }
       if (opt.hold_boundary_xy && adjacency.is_boundary[v]) move.x() = move.y() = 0;

@@ -88,9 +88,9 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"initial_sigma_gsd", &R::initial_sigma_gsd, Range::AtLeast(0),
        "> 0: each vertex is pulled back towards where the level started it (at the coarsest "
        "level towards the initial surface; below it, in height only, towards the coarser level's "
-       "result or the initial surface after a restart) by the share sigma_img^2 / (sigma_img^2 + this^2) of its images' height sigma "
-       "(this: the start's 1-sigma error in level GSD), so weakly constrained parts do not "
-       "drift; 0: off"},
+       "result or the initial surface after a restart) by the share sigma_img^2 / (sigma_img^2 + "
+       "this^2) of its images' height sigma (this: the start's 1-sigma error in level GSD), so "
+       "weakly constrained parts do not drift; 0: off"},
       {"hold_unseen", &R::hold_unseen, {},
        "vertices no pair-direction sees (occluded, grazing) do not move"},
       {"hold_boundary_xy", &R::hold_boundary_xy, {},
