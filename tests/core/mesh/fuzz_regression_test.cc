@@ -48,6 +48,13 @@ TEST(FuzzRegression, DracoBitstreamBefore22) {
   EXPECT_NE(message.find("bitstream version 1.253 is not supported"), std::string::npos) << message;
 }
 
+// fuzz_drc (third round): 111 bytes whose header flags metadata, then counts that made
+// Draco allocate 3 GB (the count check had skipped streams with metadata).
+TEST(FuzzRegression, DracoCountsAfterMetadata) {
+  const std::string message = Refusal("drc/crash-oom-metadata-then-3e9-bytes.drc");
+  EXPECT_NE(message.find("more than it can encode"), std::string::npos) << message;
+}
+
 // fuzz_drc: a position attribute of type bool made Draco read arbitrary bytes as bool.
 TEST(FuzzRegression, DracoPositionsOfTypeBool) {
   const std::string message = Refusal("drc/crash-bool-position-attribute.drc");
