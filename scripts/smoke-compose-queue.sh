@@ -121,7 +121,6 @@ trap 'exit 143' TERM
 for image in "$tag" "$redis_tag"; do
   podman image exists "$image" || fail "no image $image (run scripts/build-image.sh)"
 done
-cli() { podman run --rm --no-healthcheck --network host -e SATMESH_TOKEN -v "$work/inputs:/inputs" --entrypoint satmesh "$tag" "$@"; }
 compose_smoke_preflight
 [ -z "$(containers)" ] || fail "compose project $project has containers already: $(containers | tr '\n' ' ')"
 

@@ -74,7 +74,6 @@ trap 'exit 143' TERM
 podman image exists "$tag" || fail "no image $tag (run scripts/build-image.sh)"
 # compose.yaml names the image satmesh:latest; podman resolves it to localhost/satmesh:latest.
 [ "$tag" = localhost/satmesh:latest ] || podman tag "$tag" localhost/satmesh:latest
-cli() { podman run --rm --no-healthcheck --network host -e SATMESH_TOKEN -v "$work/inputs:/inputs" --entrypoint satmesh "$tag" "$@"; }
 compose_smoke_preflight
 
 compose_smoke_up_with_small_scene

@@ -1,7 +1,10 @@
 # Shared by scripts/smoke-compose.sh and scripts/smoke-compose-queue.sh (sourced, not run).
-# The caller defines: tag (the satmesh image), cli (the image's satmesh CLI with the inputs
-# folder at /inputs), compose (podman-compose of its project), fail (message, exit 1), url
-# (the API node), work (scratch folder), up (0 until the stack is up).
+# The caller defines: tag (the satmesh image), compose (podman-compose of its project),
+# fail (message, exit 1), url (the API node), work (scratch folder, inputs/ in it), up (0
+# until the stack is up), and exports SATMESH_TOKEN.
+
+# The image's satmesh CLI on the host network, the inputs folder at /inputs.
+cli() { podman run --rm --no-healthcheck --network host -e SATMESH_TOKEN -v "$work/inputs:/inputs" --entrypoint satmesh "$tag" "$@"; }
 
 # Checks that podman runs the image and that the port is free; else fails naming why.
 compose_smoke_preflight() {
