@@ -92,8 +92,8 @@ struct RefineOptions {
                                    // level started it (at the coarsest level towards the
                                    // initial surface; below it, in height only, towards the
                                    // coarser level's result or the initial surface after a
-                                   // restart) in proportion to how
-                                   // little the images constrain it (InitialPriorWeights:
+                                   // restart) in proportion to how little the images
+                                   // constrain it (InitialPriorWeights:
                                    // sigma_img² / (sigma_img² + this²), this in level GSD,
                                    // the start's assumed 1-sigma error); 0: off
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
