@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -195,27 +196,43 @@ DsmGrid MeshGrid(const JobSpec& spec, const InitialMesh& mesh, const std::vector
   return grid;
 }
 
-// The tile grid over the AOI's cells, tiles of `tile_cells` cells, x from the west, y
-// from the south; each tile's memory estimated.
+// The tile grid over the AOI's cells, x from the west, y from the south; each tile's
+// memory estimated. Tiles of the user's size (`balanced` false): `tile_cells` cells, the
+// last column/row taking the remainder; a sliver under half a tile joins its neighbour
+// (so edges are in [0.5, 1.5) tiles), never a tile of a few cells. Automatic tiles
+// (`balanced`): as few columns and rows as tiles of at most `tile_cells` cells need, of
+// equal size to a cell, so that no tile needs more memory than its neighbours (a
+// 2500-cell AOI in tiles of up to 1479 cells: 1250 + 1250, not 1479 + 1021).
 void CutTiles(const JobSpec& spec, const std::vector<ImageFootprintModel>& images,
-              const std::optional<InitialMesh>& mesh, int tile_cells, JobPlan* plan_out) {
+              const std::optional<InitialMesh>& mesh, int tile_cells, bool balanced,
+              JobPlan* plan_out) {
   JobPlan& plan = *plan_out;
-  plan.tile_cells = tile_cells;
   plan.tiles.clear();
   const PixelWindow& a = plan.aoi_cells;
-  // The last column/row takes the remainder: a sliver under half a tile joins its
-  // neighbour (so edges are in [0.5, 1.5) tiles), never a tile of a few cells.
-  plan.nx = std::max(1, (a.width + plan.tile_cells / 2) / plan.tile_cells);
-  plan.ny = std::max(1, (a.height + plan.tile_cells / 2) / plan.tile_cells);
+  if (balanced) {
+    plan.nx = std::max(1, (a.width + tile_cells - 1) / tile_cells);
+    plan.ny = std::max(1, (a.height + tile_cells - 1) / tile_cells);
+    plan.tile_cells = std::max((a.width + plan.nx - 1) / plan.nx, (a.height + plan.ny - 1) / plan.ny);
+  } else {
+    plan.tile_cells = tile_cells;
+    plan.nx = std::max(1, (a.width + tile_cells / 2) / tile_cells);
+    plan.ny = std::max(1, (a.height + tile_cells / 2) / tile_cells);
+  }
+  // Column tx spans [edge(tx), edge(tx + 1)) of the AOI's width; row ty (from the south)
+  // ends `edge(ty)` cells above the AOI's south edge.
+  auto edge = [&](int i, int n, int extent) {
+    if (i >= n) return extent;
+    return balanced ? int(int64_t(i) * extent / n) : i * tile_cells;
+  };
   const auto aoi = MakePolygon(plan.aoi_polygon);
   for (int ty = 0; ty < plan.ny; ++ty) {
     for (int tx = 0; tx < plan.nx; ++tx) {
       PlannedTile tile;
       tile.x = tx, tile.y = ty;
-      const int col0 = a.col0 + tx * plan.tile_cells;
-      const int row1 = a.row0 + a.height - ty * plan.tile_cells;  // exclusive, south edge
-      const int row0 = ty == plan.ny - 1 ? a.row0 : row1 - plan.tile_cells;
-      const int width = tx == plan.nx - 1 ? a.col0 + a.width - col0 : plan.tile_cells;
+      const int col0 = a.col0 + edge(tx, plan.nx, a.width);
+      const int width = a.col0 + edge(tx + 1, plan.nx, a.width) - col0;
+      const int row1 = a.row0 + a.height - edge(ty, plan.ny, a.height);  // exclusive, south edge
+      const int row0 = a.row0 + a.height - edge(ty + 1, plan.ny, a.height);
       tile.core_cells = {col0, row0, width, row1 - row0};
       const int o = plan.overlap_cells;
       tile.padded_cells = Intersect({col0 - o, row0 - o, tile.core_cells.width + 2 * o,
@@ -368,11 +385,12 @@ JobPlan PlanJob(const JobSpec& spec) {
   plan.overlap_cells = int(std::ceil(spec.tiling.overlap_m / cell - 1e-9));
   plan.memory_budget_mb = MemoryBudgetMb(spec.tiling);
   const PixelWindow& a = plan.aoi_cells;
-  CutTiles(spec, images, mesh, spec.tiling.tile_size_m > 0
-                             ? std::max(1, int(std::lround(spec.tiling.tile_size_m / cell)))
-                             : std::max(a.width, a.height),
-           &plan);
-  if (spec.tiling.tile_size_m == 0) {
+  const bool automatic = spec.tiling.tile_size_m == 0;
+  CutTiles(spec, images, mesh,
+           automatic ? std::max(a.width, a.height)
+                     : std::max(1, int(std::lround(spec.tiling.tile_size_m / cell))),
+           automatic, &plan);
+  if (automatic) {
     // Automatic tiling: the tile edge shrinks with the square root of the share of the
     // need over the fixed part that fits, until every tile fits.
     const int min_cells = std::max(32, 2 * plan.overlap_cells);
@@ -394,7 +412,7 @@ JobPlan PlanJob(const JobSpec& spec) {
                    "tiles of {} cells", worst->Name(), worst->memory.peak_mb,
                    plan.memory_budget_mb, cells);
       plan.auto_tiled = true;
-      CutTiles(spec, images, mesh, cells, &plan);
+      CutTiles(spec, images, mesh, cells, /*balanced=*/true, &plan);
     }
   }
   double worst_mb = 0, worst_px = 0;

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -120,6 +121,29 @@ TEST(PlanJob, ASliverUnderHalfATileJoinsItsNeighbour) {
   EXPECT_EQ(plan.tiles[plan.IndexOf(2, 0)].core_cells.width, 34);
   EXPECT_EQ(plan.tiles[plan.IndexOf(0, 1)].core_cells.height, 47);
   EXPECT_EQ(plan.tiles[plan.IndexOf(0, 1)].core_cells.row0, 0);
+}
+
+TEST(PlanJob, AutomaticTilesAreBalancedAndFitTheBudget) {
+  // No readable image: a tile's estimate is the fixed part and its padded DSM cells.
+  JobSpec spec = Spec(WriteTestDsm("balanced"));
+  spec.tiling.overlap_m = 1;  // 2 cells
+  spec.tiling.memory_budget_mb = kBaseMb + kBytesPerDsmCell * 2000.0 / (1 << 20);
+  const JobPlan plan = PlanJob(spec);
+  EXPECT_TRUE(plan.auto_tiled);
+  ASSERT_GT(plan.tiles.size(), 1u);
+  int min_w = 1 << 30, max_w = 0, min_h = 1 << 30, max_h = 0;
+  long cells = 0;
+  for (const PlannedTile& t : plan.tiles) {
+    EXPECT_LE(t.memory.peak_mb, spec.tiling.memory_budget_mb) << t.Name();
+    min_w = std::min(min_w, t.core_cells.width), max_w = std::max(max_w, t.core_cells.width);
+    min_h = std::min(min_h, t.core_cells.height), max_h = std::max(max_h, t.core_cells.height);
+    cells += long(t.core_cells.width) * t.core_cells.height;
+  }
+  // Equal to a cell (the last column does not take a remainder), covering the AOI.
+  EXPECT_LE(max_w - min_w, 1);
+  EXPECT_LE(max_h - min_h, 1);
+  EXPECT_EQ(cells, 100L * 80);
+  EXPECT_EQ(plan.tile_cells, std::max(max_w, max_h));
 }
 
 TEST(PlanJob, PolygonAoiKeepsTheTilesItMeets) {
