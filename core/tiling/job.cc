@@ -68,12 +68,19 @@ int CentralTile(const JobPlan& plan) {
 // tile, at a fraction of the time (large jax scene, tile of 1539^2 cells: BENCHMARKS.md).
 constexpr int kBiasWindowCells = 800;
 
-// `tile` cut to its central window of at most kBiasWindowCells per side.
+// The window the job's biases are estimated over: centred on the AOI, whatever the
+// tiling, so that a job's biases (and with them its datum) do not change with the tile
+// size or the memory budget; at most kBiasWindowCells and at most `tile`'s padded size
+// per side (the tiles fit the budget, so the window does). `tile` (the tile nearest the
+// AOI's centre) lends it the rest of a planned tile.
 PlannedTile BiasWindow(const JobPlan& plan, PlannedTile tile) {
-  PixelWindow& w = tile.padded_cells;
-  const int width = std::min(w.width, kBiasWindowCells), height = std::min(w.height, kBiasWindowCells);
-  w = PixelWindow{w.col0 + (w.width - width) / 2, w.row0 + (w.height - height) / 2, width, height};
-  tile.padded = plan.dsm.BoxOf(w);
+  const PixelWindow& a = plan.aoi_cells;
+  const int width = std::min({tile.padded_cells.width, kBiasWindowCells, plan.dsm.width});
+  const int height = std::min({tile.padded_cells.height, kBiasWindowCells, plan.dsm.height});
+  const int col0 = std::clamp(a.col0 + (a.width - width) / 2, 0, plan.dsm.width - width);
+  const int row0 = std::clamp(a.row0 + (a.height - height) / 2, 0, plan.dsm.height - height);
+  tile.padded_cells = PixelWindow{col0, row0, width, height};
+  tile.padded = plan.dsm.BoxOf(tile.padded_cells);
   return tile;
 }
 
@@ -104,13 +111,13 @@ JobBiases EstimateJobBiasesOnce(const JobSpec& spec, const JobPlan& plan, const 
   try {
     out.bias_px = EstimateJobBiases(spec, plan, &index, progress);
     out.tile = plan.tiles[index].Name();
-    spdlog::info("job: biases estimated once over the middle of tile {} ({:.1f} s), used by all {} tiles", out.tile,
+    spdlog::info("job: biases estimated once over the AOI's centre ({:.1f} s), used by all {} tiles",
                  Seconds(t0), plan.tiles.size());
   } catch (const Error& e) {  // e.g. the central tile has no surface: each tile estimates
     if (e.code() == ErrorCode::kCancelled) throw;
     out.bias_px.clear();
-    spdlog::warn("job: biases not estimated over tile {} ({}); each tile estimates its own",
-                 plan.tiles[index].Name(), e.what());
+    spdlog::warn("job: biases not estimated over the AOI's centre ({}); each tile estimates its own",
+                 e.what());
   }
   out.seconds = Seconds(t0);
   return out;

@@ -46,21 +46,22 @@ struct JobOutputs {
   double peak_rss_mb = 0;          // process peak resident memory at the end
 };
 
-// The job's per-image RPC biases, estimated once over the middle (at most 800 x 800 DSM
-// cells) of the planned tile nearest the AOI's centre (which fits the memory budget like
-// every tile), in spec.images order, added to
-// the spec's biases; an image that tile does not see keeps its bias. Throws like RunTile
-// for that tile (Error; kCancelled when cancelled).
+// The job's per-image RPC biases, estimated once over a window centred on the AOI (at
+// most 800 x 800 DSM cells, and at most the padded size of the planned tile nearest the
+// AOI's centre, which fits the memory budget like every tile; *tile_index is that tile),
+// so that they do not depend on the tiling; in spec.images order, added to the spec's
+// biases; an image the window does not see keeps its bias. Throws like RunTile for that
+// window (Error; kCancelled when cancelled).
 std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPlan& plan,
                                                int* tile_index, const Progress& progress = {});
 
-// Step 1b: the job's biases, estimated once over the central tile's middle (EstimateJobBiases).
+// Step 1b: the job's biases, estimated once over the AOI's centre (EstimateJobBiases).
 struct JobBiases {
   std::vector<Eigen::Vector2d> bias_px;  // spec.images order; empty: each tile estimates its own
-  std::string tile;                      // the tile they were estimated over
+  std::string tile;                      // the tile nearest the AOI's centre (bounds the window)
   double seconds = 0;                    // their time (that tile's windows read included)
 };
-// Empty for a one-tile job, without refine.estimate_bias, or when the central tile cannot
+// Empty for a one-tile job, without refine.estimate_bias, or when the window cannot
 // give them (no surface, no pair; logged). Throws Error{kCancelled} when cancelled.
 JobBiases EstimateJobBiasesOnce(const JobSpec& spec, const JobPlan& plan, const Progress& progress = {});
 // The spec every tile refines with: the job's biases added to the images', estimate_bias
