@@ -209,6 +209,7 @@ json TileResultToJson(const JobPlan& plan, const TileResult& t) {
   j["pairs"] = t.refine.pairs.size();
   j["pair_details"] = PairsToJson(t.refine.pair_details);  // views: indices into "views"
   j["candidate_pairs"] = t.refine.candidate_pairs;
+  j["kept_initial_share"] = t.refine.kept_initial_share;  // keep_initial_sigmas's last step
   j["gsd_m"] = t.refine.gsd_m;
   j["vertices"] = t.core_vertices;
   j["faces"] = t.core_faces;
@@ -251,6 +252,7 @@ TileResult TileResultFromJson(const JobPlan& plan, const json& j) {
   t.peak_rss_mb = j.value("peak_rss_mb", 0.0);
   t.refine.gsd_m = j.value("gsd_m", 0.0);
   t.refine.candidate_pairs = j.value("candidate_pairs", 0);
+  t.refine.kept_initial_share = j.value("kept_initial_share", 0.0);
   for (const auto& p : j.value("pair_details", json::array())) {
     StereoPair pair;
     pair.i = p.at("views").at(0).get<int>();

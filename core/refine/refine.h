@@ -34,6 +34,7 @@ struct RefineInput {
   LocalFrame frame;
   double min_z = 0, max_z = 0;  // height range (frame z) the surface stays within
   double initial_cell_m = 0;    // resolution of the initial surface (DSM cell), 0: unknown
+  bool initial_is_mesh = false;  // the job gave a mesh (RefineOptions::keep_initial_sigmas)
 };
 
 struct StageTimes {
@@ -72,6 +73,9 @@ struct RefineResult {
   double bias_s = 0;
   std::vector<LevelStats> levels;      // coarse to fine (options.levels resolved: ResolveLevels)
   double gsd_m = 0;                    // full-resolution GSD
+  // The mean share of the vertices' offsets from the initial surface undone by the last
+  // step (RefineOptions::keep_initial_sigmas; 0: off or nothing undone).
+  double kept_initial_share = 0;
   double total_s = 0;
 };
 

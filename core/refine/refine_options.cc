@@ -91,6 +91,11 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "result or the initial surface after a restart) by the share sigma_img^2 / (sigma_img^2 + "
        "this^2) of its images' height sigma (this: the start's 1-sigma error in level GSD), so "
        "weakly constrained parts do not drift; 0: off"},
+      {"keep_initial_sigmas", &R::keep_initial_sigmas, Range::AtLeast(-1),
+       "last step: each vertex keeps its offset from the initial surface with the weight z^4 / "
+       "(z^4 + this^4), z = offset / its height sigma from the images, so a change within the "
+       "images' noise returns to the initial surface; 0: off; -1: 2 for a mesh start (a model "
+       "the user trusts, a previous result), off for a DSM start (stereo DSMs err beyond noise)"},
       {"hold_unseen", &R::hold_unseen, {},
        "vertices no pair-direction sees (occluded, grazing) do not move"},
       {"hold_boundary_xy", &R::hold_boundary_xy, {},

@@ -96,6 +96,10 @@ struct RefineOptions {
                                    // constrain it (InitialPriorWeights:
                                    // sigma_img² / (sigma_img² + this²), this in level GSD,
                                    // the start's assumed 1-sigma error); 0: off
+  double keep_initial_sigmas = -1;  // last step (KeepSignificantChanges): a vertex returns to
+                                   // the initial surface unless its offset from it exceeds
+                                   // about this many of its height sigmas from the images;
+                                   // 0: off; -1: 2 for a mesh start, off for a DSM start
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing

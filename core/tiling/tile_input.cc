@@ -229,6 +229,7 @@ TileInput PrepareMeshTileInput(const JobSpec& spec, const JobPlan& plan, const P
   const double cell_m = plan.dsm.geo_transform[1];
   FrameAndViews(spec, crs, t.padded, *zmin_it, *zmax_it, Median(heights), cell_m, &tile);
   tile.refine.initial_cell_m = cell_m;
+  tile.refine.initial_is_mesh = true;
   TriangleMesh& initial = tile.refine.initial_mesh;  // the coarse level remeshes it
   initial.faces = std::move(piece.faces);
   initial.vertices.reserve(geo.size());
