@@ -9,6 +9,7 @@
 
 #include "core/common/error.h"
 #include "core/geo/crs.h"
+#include "core/refine/coarse_mesh.h"
 #include "core/mesh/mesh_io.h"
 
 namespace satmesh {
@@ -78,7 +79,7 @@ std::string MeshPlanCrs(const JobSpec& spec, const InitialMesh& mesh) {
   return CrsToWkt(UtmCrsAt(center.x(), center.y()));
 }
 
-InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs) {
+InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs, double fill_holes_m) {
   InitialMesh out = mesh;
   out.crs = crs;
   try {
@@ -105,6 +106,15 @@ InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs) {
   if (out.repaired.Total() > 0) spdlog::info("{}: repaired: {}", Where(out), out.repaired.ToString());
   SATMESH_CHECK(!out.mesh.faces.empty(), ErrorCode::kInvalidArgument,
                 Where(out) + ": no face left after removing degenerate ones (" + out.repaired.ToString() + ")");
+  if (fill_holes_m > 0) {
+    const HoleFill fill = FillHoles(fill_holes_m, &out.mesh.points, &out.mesh.faces);
+    if (!out.mesh.height_sigma.empty()) out.mesh.height_sigma.resize(out.mesh.points.size(), NAN);
+    out.holes_filled = fill.filled;
+    if (fill.filled + fill.too_big > 0)
+      spdlog::info("{}: {} hole(s) up to {} m filled ({} faces), {} larger left open, {} covered "
+                   "from above left", Where(out), fill.filled, fill_holes_m, fill.faces_added,
+                   fill.too_big, fill.covered);
+  }
   BoundingBox(&out);
   return out;
 }

@@ -21,6 +21,7 @@ struct InitialMesh {
   std::string crs;        // of `mesh`'s points
   PointMesh mesh;         // double coordinates in `crs`
   MeshDebris repaired;    // removed when read (CleanMesh)
+  size_t holes_filled = 0;  // by InitialMeshIn (FillHoles)
   Eigen::Vector3d min{0, 0, 0}, max{0, 0, 0};  // bounding box in `crs`
 };
 
@@ -39,10 +40,10 @@ std::string MeshPlanCrs(const JobSpec& spec, const InitialMesh& mesh);
 // The mesh in `crs` (x, y on the map, z ellipsoidal height; projected), repaired there
 // (CleanMesh in metres: close vertices merged, degenerate and duplicate faces and
 // unreferenced vertices dropped; non-manifold faces are dropped later by the coarse
-// remeshing). Throws Error{kInvalidArgument} naming the file when a point does not
+// remeshing), its holes up to fill_holes_m across filled (FillHoles; 0: none). Throws Error{kInvalidArgument} naming the file when a point does not
 // transform, when nothing is left after the repair, or when the surface faces down
 // (more than twice as much area faces down as up, seen from above: inverted orientation).
-InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs);
+InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs, double fill_holes_m);
 
 // The part of `mesh` (in the plan's CRS) inside `box`, debris-free (ClipToBox).
 PointMesh ClipInitialMesh(const InitialMesh& mesh, const Box2d& box);

@@ -52,7 +52,8 @@ struct JobSpec {
   // only where the mesh has no surface). At least one.
   std::string initial_dsm;     // GeoTIFF DSM (ellipsoidal heights), projected CRS; "" = none
   JobInitialMesh initial_mesh;
-  double fill_holes_m = 50;    // the DSM's holes filled up to this far from data (FillDsmHoles), m; 0: none
+  double fill_holes_m = 50;    // the DSM's holes filled up to this far from data (FillDsmHoles),
+                               // a mesh's up to this size across (FillHoles), m; 0: none
   std::string output_crs;      // "" = the initial DSM's CRS, else the initial mesh's
   // Mesh jobs without a DSM: cell of the job's grid (dsm.tif, the tiles' DSMs), m in the
   // planning CRS, >= 0; 0 = the images' GSD. Ignored when initial_dsm gives the grid.

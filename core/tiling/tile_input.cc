@@ -210,7 +210,8 @@ TileInput PrepareMeshTileInput(const JobSpec& spec, const JobPlan& plan, const P
   TileInput tile;
   const std::string& crs = plan.dsm.crs_wkt;
   tile.dsm_crs_wkt = crs;
-  PointMesh piece = ClipInitialMesh(InitialMeshIn(ReadInitialMesh(spec), crs), t.padded);
+  PointMesh piece =
+      ClipInitialMesh(InitialMeshIn(ReadInitialMesh(spec), crs, spec.fill_holes_m), t.padded);
   if (!spec.initial_dsm.empty()) {
     Dsm dsm = ReadDsmWindow(spec.initial_dsm, t.padded_cells);
     FillDsmHoles(&dsm, spec.fill_holes_m);

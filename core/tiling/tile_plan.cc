@@ -350,7 +350,8 @@ JobPlan PlanJob(const JobSpec& spec) {
   }
   const std::string source_crs = mesh ? mesh->crs : plan.dsm.crs_wkt;
   if (mesh) {
-    mesh = InitialMeshIn(*mesh, spec.initial_dsm.empty() ? MeshPlanCrs(spec, *mesh) : plan.dsm.crs_wkt);
+    mesh = InitialMeshIn(*mesh, spec.initial_dsm.empty() ? MeshPlanCrs(spec, *mesh) : plan.dsm.crs_wkt,
+                         spec.fill_holes_m);
     CheckMeshSeenByImages(*mesh, images);
     plan.mesh_zmin = mesh->min.z();
     plan.mesh_zmax = mesh->max.z();

@@ -145,3 +145,51 @@ TEST(RemeshIsotropic, RejectsBadOptionsAndEmptyMeshes) {
 
 }  // namespace
 }  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+// A 30 x 30 m tilted plane (z = 0.2 x + 5) of 1 m cells, without the faces whose centre
+// lies in a 4 x 4 m square at (8, 8) and in a 12 x 12 m square at (20, 18).
+void PlaneWithTwoHoles(std::vector<Eigen::Vector3d>* points, std::vector<Eigen::Vector3i>* faces) {
+  const TriangleMesh grid = testing::CreateGridMesh(30, 1.f);
+  for (const auto& v : grid.vertices) points->emplace_back(v.x(), v.y(), 0.2 * v.x() + 5);
+  for (const auto& f : grid.faces) {
+    const Eigen::Vector3d c = ((*points)[f[0]] + (*points)[f[1]] + (*points)[f[2]]) / 3;
+    const bool small = std::abs(c.x() - 8) < 2 && std::abs(c.y() - 8) < 2;
+    const bool large = std::abs(c.x() - 20) < 6 && std::abs(c.y() - 18) < 6;
+    if (!small && !large) faces->push_back(f);
+  }
+}
+
+double Area(const std::vector<Eigen::Vector3d>& p, const std::vector<Eigen::Vector3i>& faces) {
+  double a = 0;
+  for (const auto& f : faces) a += 0.5 * (p[f[1]] - p[f[0]]).cross(p[f[2]] - p[f[0]]).norm();
+  return a;
+}
+
+TEST(FillHoles, FillsTheHolesUpToTheLimitOnTheSurfaceNotTheOuterBorder) {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector3i> faces;
+  PlaneWithTwoHoles(&points, &faces);
+  const size_t old_points = points.size();
+  const std::vector<Eigen::Vector3d> before = points;
+  const double slope = std::sqrt(1 + 0.2 * 0.2), area = Area(points, faces);
+  // 10 m: the 4 m hole (5.7 m across) is filled, the 12 m one (17 m) is not.
+  const HoleFill fill = FillHoles(10, &points, &faces);
+  EXPECT_EQ(fill.filled, 1u);
+  EXPECT_EQ(fill.too_big, 1u);
+  EXPECT_NEAR(Area(points, faces) - area, 16 * slope, 0.5);
+  for (size_t i = 0; i < old_points; ++i) EXPECT_EQ(points[i], before[i]) << i;  // kept
+  ASSERT_GT(points.size(), old_points);  // refined: inner vertices, on the plane
+  for (size_t i = old_points; i < points.size(); ++i)
+    EXPECT_NEAR(points[i].z(), 0.2 * points[i].x() + 5, 0.01) << i;
+  // 100 m: the large one too; the outer border (30 m square, 42 m across) never.
+  const HoleFill again = FillHoles(100, &points, &faces);
+  EXPECT_EQ(again.filled, 1u);
+  EXPECT_EQ(again.too_big, 0u);
+  EXPECT_NEAR(Area(points, faces), 900 * slope, 0.5);
+}
+
+}  // namespace
+}  // namespace satmesh

@@ -243,6 +243,74 @@ int InteriorHoles(const std::string& dsm_path) {
   return holes;
 }
 
+// The centre of the highest 4 m disc of the truth DSM flat within 0.2 m (a roof's
+// middle: nothing above it, no wall near it), and its height.
+Eigen::Vector3d FlatRoofSpot(const Dsm& truth) {
+  const double cell = truth.geo_transform[1];
+  const int r = int(std::ceil(4 / cell));
+  Eigen::Vector3d best(0, 0, -1e9);
+  for (int j = r; j < truth.height - r; j += 3)
+    for (int i = r; i < truth.width - r; i += 3) {
+      float lo = 1e9f, hi = -1e9f;
+      for (int dj = -r; dj <= r; ++dj)
+        for (int di = -r; di <= r; ++di)
+          if (di * di + dj * dj <= r * r) {
+            const float z = truth.at(i + di, j + dj);
+            lo = std::min(lo, z), hi = std::max(hi, z);
+          }
+      if (std::isfinite(lo) && std::isfinite(hi) && hi - lo < 0.2f && hi > best.z())
+        best = Eigen::Vector3d(truth.geo_transform[0] + (i + 0.5) * cell,
+                               truth.geo_transform[3] - (j + 0.5) * cell, hi);
+    }
+  return best;
+}
+
+TEST_F(MeshJob, HolesInTheMeshAreFilledUpToTheLimit) {
+  // The truth mesh without its faces within 2.5 m of a flat roof's middle: a gap the
+  // images see through (a photogrammetric mesh's missing patch).
+  const Eigen::Vector3d spot = FlatRoofSpot(ReadDsm(scene_ + "/truth/dsm.tif"));
+  ASSERT_GT(spot.z(), -1e8) << "no flat roof in the tiny scene";
+  TriangleMesh mesh = ReadMesh(scene_ + "/truth/mesh.ply");
+  std::vector<Eigen::Vector3i> kept;
+  for (const auto& f : mesh.faces) {
+    const Eigen::Vector3d c =
+        (mesh.AbsoluteVertex(f[0]) + mesh.AbsoluteVertex(f[1]) + mesh.AbsoluteVertex(f[2])) / 3;
+    if ((c.head<2>() - spot.head<2>()).norm() > 2.5 || std::abs(c.z() - spot.z()) > 1) kept.push_back(f);
+  }
+  ASSERT_LT(kept.size(), mesh.faces.size());
+  mesh.faces = kept;
+  const std::string dir = OutDir("holed_mesh");
+  fs::create_directories(dir);
+  WriteMesh(dir + "/holed.ply", mesh);
+  JobSpec spec = Spec();
+  spec.initial_dsm.clear();
+  spec.initial_mesh.path = dir + "/holed.ply";
+  spec.aoi.polygon = SceneAoi();
+  const std::string filled_dir = OutDir("holes_filled");
+  const JobOutputs filled = RunJob(spec, filled_dir);  // fill_holes_m 50 m
+  spec.fill_holes_m = 0;
+  const JobOutputs open = RunJob(spec, OutDir("holes_open"));
+  ASSERT_EQ(filled.assembly.tiles_failed, 0);
+  ASSERT_EQ(open.assembly.tiles_failed, 0);
+  // Open: the roof's hole shows in the DSM (a 1.5 m disc is ~80 cells), or the ground
+  // far below it; filled: the roof is whole again, at its height.
+  const Dsm open_dsm = ReadDsm(open.dsm_path), filled_dsm = ReadDsm(filled.dsm_path);
+  int open_gap = 0, filled_gap = 0, cells = 0;
+  for (int j = 0; j < filled_dsm.height; ++j)
+    for (int i = 0; i < filled_dsm.width; ++i) {
+      const Eigen::Vector2d p(filled_dsm.geo_transform[0] + (i + 0.5) * filled_dsm.geo_transform[1],
+                              filled_dsm.geo_transform[3] + (j + 0.5) * filled_dsm.geo_transform[5]);
+      if ((p - spot.head<2>()).norm() > 1.5) continue;
+      ++cells;
+      open_gap += !(std::abs(open_dsm.at(i, j) - spot.z()) < 0.5);
+      filled_gap += !(std::abs(filled_dsm.at(i, j) - spot.z()) < 0.5);
+    }
+  EXPECT_GT(cells, 50);
+  EXPECT_GT(open_gap, cells / 2);
+  EXPECT_EQ(filled_gap, 0);
+  ExpectNoDebris(filled_dir);
+}
+
 TEST_F(MeshJob, ChainingAResultIsStable) {
   JobSpec first = Spec();
   first.tiling.tile_size_m = 18;
