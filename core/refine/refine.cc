@@ -5,12 +5,12 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <optional>
 
 #include "core/common/error.h"
+#include "core/common/stage_time.h"
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/bias_estimation.h"
@@ -60,10 +60,6 @@ constexpr double kSkipCheckMargin = 0.01;
 // in 3D below the coarsest level cost 0.3-0.5 points of facades).
 constexpr double kInitialPullPerIteration = 0.1;
 
-using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 void CheckInput(const RefineInput& input) {
   SATMESH_CHECK(input.views.size() >= 2, ErrorCode::kInvalidInput,
@@ -185,7 +181,7 @@ double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sour
 // of the level's first iteration is below `abandon_below` (NaN: never).
 bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, TriangleMesh* mesh,
                  LevelStats* stats_out) {
-  const auto level_start = Clock::now();
+  const auto level_start = StageClock::now();
   const RefineOptions& opt = ctx.options;
   LevelStats& stats = *stats_out;
   stats = LevelStats{};
@@ -231,7 +227,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   for (int it = 0; it <= iterations; ++it) {
     ctx.progress.ThrowIfCancelled();
     const bool last = it == iterations;
-    auto t0 = Clock::now();
+    auto t0 = StageClock::now();
     const auto normals = FaceNormals(*mesh);
     if (it > 0 && !last && it % opt.hit_maps_every != 0) {
       FollowHitMaps(*mesh, &views, &raster, &normals);  // faces kept, points moved with them
@@ -242,9 +238,9 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
         stats.times.intersect_s += CastHitMap(*scene, &v, &normals);
       }
     }
-    stats.times.hit_maps_s += Seconds(t0);
+    stats.times.hit_maps_s += SecondsSince(t0);
 
-    t0 = Clock::now();
+    t0 = StageClock::now();
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
     std::fill(seen.begin(), seen.end(), 0);
     if (last) std::fill(information.begin(), information.end(), 0.0);
@@ -262,7 +258,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     if (it == 0 && initial_prior)
       prior_weight = InitialPriorWeights(information, noise_variance, opt.initial_sigma_gsd * gsd);
     stats.mean_zncc.push_back(zncc);
-    stats.times.gradient_s += Seconds(t0);
+    stats.times.gradient_s += SecondsSince(t0);
     if (it == 0 && zncc < abandon_below) return false;
     if (last) {
       // The finished surface's height sigma from the images (+inf: no image sees it).
@@ -270,12 +266,12 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       break;
     }
 
-    t0 = Clock::now();
+    t0 = StageClock::now();
     const auto u2 = UmbrellaSquared(mesh->vertices, adjacency);
-    stats.times.smoothness_s += Seconds(t0);
+    stats.times.smoothness_s += SecondsSince(t0);
 
     // Gradient step: photometric part in units of GSD², thin-plate homogenised by 1/GSD².
-    t0 = Clock::now();
+    t0 = StageClock::now();
     const double photo_scale = opt.step * opt.alpha * gsd * gsd;
     const double smooth_scale = opt.step * opt.beta;
     const double max_move = opt.max_step_gsd * gsd;
@@ -302,12 +298,12 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       mesh->vertices[v] += move.cast<float>();
     }
     if (scene) scene->UpdateVertices(mesh->vertices);
-    stats.times.update_s += Seconds(t0);
+    stats.times.update_s += SecondsSince(t0);
     ++stats.iterations;
     const double done = (opt.levels - level + double(it + 1) / (iterations + 1));
     ctx.progress.Report(done / (opt.levels + 1), "level " + std::to_string(level));
   }
-  stats.level_s = Seconds(level_start);
+  stats.level_s = SecondsSince(level_start);
   spdlog::info("level {}: {} vertices, {} faces, GSD {:.2f} m, mean ZNCC {:.4f} -> {:.4f} ({:.1f} s)",
                level, stats.num_vertices, stats.num_faces, gsd, stats.mean_zncc.front(),
                stats.mean_zncc.back(), stats.level_s);
@@ -361,7 +357,7 @@ PairSelection SelectPairsOrThrow(const RefineInput& input, const std::vector<Pre
 void EstimateBiases(const RefineInput& input, const PairSelection& selection,
                     const RefineOptions& options, const Progress& progress,
                     std::vector<PreparedView>* views, RefineResult* result) {
-  const auto t0 = Clock::now();
+  const auto t0 = StageClock::now();
   BiasOptions bias;
   bias.refine = options;
   const BiasEstimate estimate =
@@ -371,7 +367,7 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
     rpc = rpc.WithBias(rpc.bias() + estimate.bias_col_row_px[v]);
   }
   result->view_bias_px = estimate.bias_col_row_px;
-  result->bias_s = Seconds(t0);
+  result->bias_s = SecondsSince(t0);
 }
 
 // Step 4: coarse to fine. Below the coarsest level, the previous level's result
@@ -392,7 +388,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                          result->gsd_m};
   bool check_initial = options.restart_from_initial;
   for (int level = options.levels; level >= 0; --level) {
-    const auto level_start = Clock::now();
+    const auto level_start = StageClock::now();
     double initial_zncc = std::numeric_limits<double>::quiet_NaN(), check_s = 0;
     TriangleMesh initial;
     if (level < options.levels) {
@@ -406,12 +402,12 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                      faces_before, mesh.num_faces());
       SortSpatially(&mesh);
       if (check_initial) {
-        const auto t0 = Clock::now();
+        const auto t0 = StageClock::now();
         initial = InitialSurfaceAt(input, options, result->gsd_m, level);
         initial_zncc = LevelZncc(input, views, result->pairs, options,
                                  result->gsd_m * std::ldexp(1.0, level), level, initial,
                                  options.rasterize_hit_maps);
-        check_s = Seconds(t0);
+        check_s = SecondsSince(t0);
       }
     }
     LevelStats stats;
@@ -433,7 +429,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
     stats.initial_zncc = initial_zncc;
     stats.restarted = restarted;
     stats.initial_check_s = check_s;
-    stats.level_s = Seconds(level_start);
+    stats.level_s = SecondsSince(level_start);
     result->levels.push_back(std::move(stats));
   }
   result->mesh = std::move(mesh);
@@ -476,7 +472,7 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
   const std::string problem = user_options.Check();
   SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "refine options: " + problem);
   CheckInput(input);
-  const auto start = Clock::now();
+  const auto start = StageClock::now();
   RefineResult result;
 
   // 1. Levels from the GSD; normalisation, pyramids (deep enough for the bias search too),
@@ -514,7 +510,7 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
 
   // 5. The initial surface kept where the images do not contradict it beyond their noise.
   KeepInitialWithinNoise(input, options, &result);
-  result.total_s = Seconds(start);
+  result.total_s = SecondsSince(start);
   progress.Report(1.0, "done");
   return result;
 }

@@ -5,13 +5,13 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <mutex>
 #include <thread>
 
 #include "core/common/error.h"
+#include "core/common/stage_time.h"
 #include "core/common/threads.h"
 #include "core/refine/bias_estimation.h"
 #include "core/tiling/input_check.h"
@@ -20,10 +20,6 @@
 namespace satmesh {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 // Overall progress over tiles refined in parallel: the mean of their fractions.
 class PoolProgress {
@@ -106,20 +102,20 @@ std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPla
 JobBiases EstimateJobBiasesOnce(const JobSpec& spec, const JobPlan& plan, const Progress& progress) {
   JobBiases out;
   if (plan.tiles.size() <= 1 || !spec.refine.estimate_bias) return out;
-  const auto t0 = Clock::now();
+  const auto t0 = StageClock::now();
   int index = 0;
   try {
     out.bias_px = EstimateJobBiases(spec, plan, &index, progress);
     out.tile = plan.tiles[index].Name();
     spdlog::info("job: biases estimated once over the AOI's centre ({:.1f} s), used by all {} tiles",
-                 Seconds(t0), plan.tiles.size());
+                 SecondsSince(t0), plan.tiles.size());
   } catch (const Error& e) {  // e.g. the central tile has no surface: each tile estimates
     if (e.code() == ErrorCode::kCancelled) throw;
     out.bias_px.clear();
     spdlog::warn("job: biases not estimated over the AOI's centre ({}); each tile estimates its own",
                  e.what());
   }
-  out.seconds = Seconds(t0);
+  out.seconds = SecondsSince(t0);
   return out;
 }
 
@@ -183,11 +179,11 @@ JobOutputs AssembleJob(const JobPlan& plan, std::vector<TileResult> tiles, const
 }
 
 JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progress& progress) {
-  const auto t_start = Clock::now();
+  const auto t_start = StageClock::now();
   JobOutputs out;
   out.plan = PlanJob(spec);
   CheckJobInputs(spec, out.plan);
-  out.plan_s = Seconds(t_start);
+  out.plan_s = SecondsSince(t_start);
   std::filesystem::create_directories(std::filesystem::path(out_dir) / "tiles");
 
   // Tiled: the biases once for the job (every tile then refines with the same RPCs).
@@ -218,7 +214,7 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
         spdlog::info("tile {} {} ({}/{})", name, out.tiles[i].ok ? "done" : "FAILED", i + 1, n);
     }
   };
-  const auto t_tiles = Clock::now();
+  const auto t_tiles = StageClock::now();
   if (out.workers == 1) {
     worker();
   } else {  // each worker on a thread of its own, so this thread's OpenMP setting stays
@@ -226,7 +222,7 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
     for (int w = 0; w < out.workers; ++w) threads.emplace_back(worker);
     for (auto& t : threads) t.join();
   }
-  out.tiles_s = Seconds(t_tiles);
+  out.tiles_s = SecondsSince(t_tiles);
   // The job's biases, in each tile's view order, as a tile that estimated them reports.
   for (TileResult& t : out.tiles) SetJobBiases(spec, biases, &t);
   if (cancelled || progress.Cancelled()) ThrowError(ErrorCode::kCancelled, "cancelled by the caller");
@@ -245,7 +241,7 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   out.peak_rss_mb = usage.ru_maxrss / 1024.0;
-  out.total_s = Seconds(t_start);
+  out.total_s = SecondsSince(t_start);
   progress.Report(1.0, "done");
   return out;
 }

@@ -4,12 +4,12 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <numbers>
 
+#include "core/common/stage_time.h"
 #include "core/dsm/dsm.h"
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
@@ -20,10 +20,6 @@ namespace satmesh {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 constexpr const char* kEcef = "EPSG:4978";
 
@@ -218,20 +214,20 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
     SATMESH_CHECK(tile.memory.peak_mb <= plan.memory_budget_mb || plan.memory_budget_mb <= 0,
                   ErrorCode::kInvalidArgument,
                   OverBudgetMessage("tile " + tile.Name(), tile.memory, plan.memory_budget_mb));
-    auto t0 = Clock::now();
+    auto t0 = StageClock::now();
     TileInput input = PrepareTileInput(spec, plan, tile_index);
     r.view_names = input.view_names;
     r.dropped_views = input.dropped_views;
     r.image_mb = input.image_bytes / (1 << 20);
-    r.prepare_s = Seconds(t0);
+    r.prepare_s = SecondsSince(t0);
 
-    t0 = Clock::now();
+    t0 = StageClock::now();
     r.refine = Refine(input.refine, spec.refine, progress);
     r.view_bias_px = r.refine.view_bias_px;
     r.bias_s = r.refine.bias_s;
-    r.refine_s = Seconds(t0);
+    r.refine_s = SecondsSince(t0);
 
-    t0 = Clock::now();
+    t0 = StageClock::now();
     const TriangleMesh& local = r.refine.mesh;
     std::vector<Eigen::Vector3d> geo(local.vertices.size());
     for (size_t i = 0; i < geo.size(); ++i) geo[i] = input.refine.frame.GeoFromLocal(local.AbsoluteVertex(i));
@@ -255,7 +251,7 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
     SATMESH_CHECK(!piece.faces.empty(), ErrorCode::kInvalidInput,
                   "tile " + tile.Name() + ": no refined surface inside the tile's core");
     WritePiece(piece, tile, plan, input.initial_heights, out_dir, &r);
-    r.write_s = Seconds(t0);
+    r.write_s = SecondsSince(t0);
     if (!keep_mesh) r.refine.mesh = TriangleMesh{};
     r.ok = true;
   } catch (const Error& e) {
