@@ -1,0 +1,265 @@
+#include "core/refine/refine_level.h"
+
+#include <omp.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "core/common/stage_time.h"
+#include "core/mesh/topology.h"
+#include "core/raycast/ray_scene.h"
+#include "core/refine/height_confidence.h"
+#include "core/refine/hit_map_raster.h"
+#include "core/refine/photometric_gradient.h"
+#include "core/refine/thin_plate.h"
+#include "core/refine/view_level.h"
+
+namespace satmesh {
+namespace {
+
+// At every level (initial_sigma_gsd > 0), each iteration moves a vertex back towards where
+// the level started it by this fraction of its offset times its InitialPriorWeights weight:
+// a vertex the images do not see returns most of the way within ~20 iterations, and the
+// low-frequency drift a single weakly textured pair produces is bounded instead of
+// growing with the iterations (docs/benchmarks-history.md, session 13: stereo 0.5 m roofs
+// 0.92x of the initial with 40 iterations and no pull, 0.78x with it; 0.05-0.2 give the
+// same). Below the coarsest level the start is the coarser level's result (or the initial
+// surface after a restart), and only its height pulls: a vertex the finer images constrain
+// weakly keeps the height the coarser level found instead of following their matching
+// noise, while walls stay free to move sideways, which is what the finer level is for
+// (docs/benchmarks-history.md, session 15: refined from the true surface, tri-stereo 0.3 m
+// roofs drift to 0.107 m NMAD with the pull at the coarsest level only, 0.073 m with it at
+// every level; from the DSM, 0.3 m roofs 0-4% better, facades within 0.3 points; pulling
+// in 3D below the coarsest level cost 0.3-0.5 points of facades).
+constexpr double kInitialPullPerIteration = 0.1;
+
+
+// One thread's buffers of the photometric pass, kept across iterations: they are tens
+// of MB a thread at level 0, and fresh ones cost page faults and zeroing every pass.
+struct PassScratch {
+  GradientAccumulator accumulator;
+  PairWorkspace workspace;
+};
+
+// Mean ZNCC over all pair-directions; fills the gradient and per-vertex pair counts.
+// Pair-directions run in parallel (one per thread, gathered per face by each thread's
+// accumulator, scattered to the vertices once at the end). The views' hit maps, with
+// their ray cosines, must be current for the mesh and its face normals.
+double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& slot,
+                       const std::vector<std::pair<int, int>>& pairs, const TriangleMesh& mesh,
+                       const std::vector<Eigen::Vector3f>& normals,
+                       const PhotometricOptions& options, std::vector<PassScratch>* scratch,
+                       std::vector<Eigen::Vector3d>* gradient, std::vector<int>* seen,
+                       int one_direction = -1, std::vector<double>* information = nullptr) {
+  // one_direction >= 0: pair k only as (i, j) if (one_direction + k) is even, else (j, i).
+  std::vector<std::pair<int, int>> directions;
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    const auto [i, j] = pairs[k];
+    if (one_direction < 0) directions.insert(directions.end(), {{i, j}, {j, i}});
+    else if ((one_direction + k) % 2 == 0) directions.push_back({i, j});
+    else directions.push_back({j, i});
+  }
+  const bool accumulate = gradient || seen || information;
+  double sum = 0;
+  long count = 0;
+  if (scratch->size() < size_t(omp_get_max_threads())) scratch->resize(omp_get_max_threads());
+#pragma omp parallel
+  {
+    PassScratch& own = (*scratch)[omp_get_thread_num()];
+    GradientAccumulator& accumulator = own.accumulator;
+    if (accumulate) accumulator.Reset(mesh, information != nullptr);
+    PairWorkspace& workspace = own.workspace;
+#pragma omp for schedule(dynamic, 1) reduction(+ : sum, count)
+    for (size_t d = 0; d < directions.size(); ++d) {
+      const auto [a, b] = directions[d];
+      const PairEnergy e =
+          AccumulatePairGradient(views[slot[a]], views[slot[b]], normals, options,
+                                 accumulate ? &accumulator : nullptr, &workspace);
+      sum += e.sum_zncc;
+      count += e.num_windows;
+    }
+    if (accumulate) {
+#pragma omp critical
+      accumulator.AddTo(normals, gradient, seen, information);
+    }
+  }
+  return count > 0 ? sum / count : 0.0;
+}
+
+// The level data of every view that takes part in a pair; slot[view] indexes it (-1: none).
+std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
+                                      const std::vector<PreparedView>& sources,
+                                      const std::vector<std::pair<int, int>>& pairs,
+                                      const TriangleMesh& mesh, int level, int grid_px,
+                                      std::vector<int>* slot) {
+  Eigen::Vector3d box_min, box_max;
+  SurfaceBox(mesh, input.min_z, input.max_z, &box_min, &box_max);
+  slot->assign(sources.size(), -1);
+  std::vector<ViewLevel> views;
+  for (const auto& [i, j] : pairs) {
+    for (int v : {i, j}) {
+      if ((*slot)[v] >= 0) continue;
+      (*slot)[v] = int(views.size());
+      views.push_back(MakeViewLevel(v, level, sources[v].pyramid[level], sources[v].rpc,
+                                    input.frame, box_min, box_max, grid_px));
+    }
+  }
+  return views;
+}
+
+}  // namespace
+
+double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sources,
+                 const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
+                 double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize) {
+  std::vector<int> slot;
+  std::vector<ViewLevel> views =
+      MakeViewLevels(input, sources, pairs, mesh, level, options.virtual_camera_grid_px, &slot);
+  const auto normals = FaceNormals(mesh);
+  if (rasterize) {
+    HitMapScratch raster;
+    RasterizeHitMaps(mesh, &views, &raster, &normals);
+  } else {
+    const RayScene scene(mesh);
+    for (auto& v : views) CastHitMap(scene, &v, &normals);
+  }
+  std::vector<PassScratch> scratch;
+  return PhotometricPass(views, slot, pairs, mesh, normals,
+                         PhotometricOptionsAt(options, level_gsd_m, MeanNoiseVariance(sources, level)),
+                         &scratch, nullptr, nullptr);
+}
+
+bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, TriangleMesh* mesh,
+                 LevelStats* stats_out) {
+  const auto level_start = StageClock::now();
+  const RefineOptions& opt = ctx.options;
+  LevelStats& stats = *stats_out;
+  stats = LevelStats{};
+  stats.level = level;
+  stats.gsd_m = ctx.gsd_m * std::ldexp(1.0, level);
+  const double gsd = stats.gsd_m;
+
+  std::vector<int> slot;
+  std::vector<ViewLevel> views = MakeViewLevels(ctx.input, ctx.sources, ctx.pairs, *mesh, level,
+                                                opt.virtual_camera_grid_px, &slot);
+  const double noise_variance = MeanNoiseVariance(ctx.sources, level);
+  const PhotometricOptions photo = PhotometricOptionsAt(opt, gsd, noise_variance);
+
+  std::optional<RayScene> scene;  // Embree, unless the hit maps are rasterized
+  if (!opt.rasterize_hit_maps) scene.emplace(*mesh);
+  HitMapScratch raster;
+  std::vector<PassScratch> scratch;
+  const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
+  const size_t nv = mesh->vertices.size();
+  stats.num_vertices = int(nv);
+  stats.num_faces = int(mesh->faces.size());
+  std::vector<Eigen::Vector3d> gradient(nv);
+  std::vector<int> seen(nv);
+  // Per-vertex height confidence (HeightConfidenceFromInformation), from the level's first
+  // iteration (both directions of every pair); empty: from the pairs' geometry.
+  std::vector<double> information;
+  std::vector<float> confidence;
+  const bool data_confidence = opt.height_sigma_gsd > 0 && opt.min_height_confidence < 1;
+  // Every level keeps weakly constrained vertices near where it started them
+  // (InitialPriorWeights, kInitialPullPerIteration): the coarsest level near the initial
+  // surface, finer ones at the heights of the coarser level's result (or of the initial
+  // surface after a restart).
+  const bool coarsest = level == opt.levels;
+  const bool initial_prior = opt.initial_sigma_gsd > 0;
+  const std::vector<Eigen::Vector3f> start = initial_prior ? mesh->vertices
+                                                           : std::vector<Eigen::Vector3f>{};
+  std::vector<float> prior_weight;
+  if (data_confidence || initial_prior || level == 0) information.assign(nv, 0.0);
+  const int iterations =
+      coarsest ? int(std::lround(opt.coarsest_iterations_factor * opt.iterations_per_level))
+               : opt.iterations_per_level;
+
+  for (int it = 0; it <= iterations; ++it) {
+    ctx.progress.ThrowIfCancelled();
+    const bool last = it == iterations;
+    auto t0 = StageClock::now();
+    const auto normals = FaceNormals(*mesh);
+    if (it > 0 && !last && it % opt.hit_maps_every != 0) {
+      FollowHitMaps(*mesh, &views, &raster, &normals);  // faces kept, points moved with them
+    } else if (opt.rasterize_hit_maps) {
+      RasterizeHitMaps(*mesh, &views, &raster, &normals);
+    } else {
+      for (auto& v : views) {
+        stats.times.intersect_s += CastHitMap(*scene, &v, &normals);
+      }
+    }
+    stats.times.hit_maps_s += SecondsSince(t0);
+
+    t0 = StageClock::now();
+    std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
+    std::fill(seen.begin(), seen.end(), 0);
+    if (last) std::fill(information.begin(), information.end(), 0.0);
+    // Iterations between the first and the last take one direction per pair, alternating.
+    const bool half = opt.alternate_directions && it > 0 && !last;
+    const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, normals, photo, &scratch,
+                                        last ? nullptr : &gradient, last ? nullptr : &seen,
+                                        half ? it % 2 : -1,
+                                        (it == 0 && (data_confidence || initial_prior)) ||
+                                                (last && level == 0)
+                                            ? &information
+                                            : nullptr);
+    if (it == 0 && data_confidence)
+      confidence = HeightConfidenceFromInformation(information, noise_variance, gsd, opt, &stats);
+    if (it == 0 && initial_prior)
+      prior_weight = InitialPriorWeights(information, noise_variance, opt.initial_sigma_gsd * gsd);
+    stats.mean_zncc.push_back(zncc);
+    stats.times.gradient_s += SecondsSince(t0);
+    if (it == 0 && zncc < abandon_below) return false;
+    if (last) {
+      // The finished surface's height sigma from the images (+inf: no image sees it).
+      if (level == 0) mesh->height_sigma = HeightSigmaFromInformation(information, noise_variance);
+      break;
+    }
+
+    t0 = StageClock::now();
+    const auto u2 = UmbrellaSquared(mesh->vertices, adjacency);
+    stats.times.smoothness_s += SecondsSince(t0);
+
+    // Gradient step: photometric part in units of GSD², thin-plate homogenised by 1/GSD².
+    t0 = StageClock::now();
+    const double photo_scale = opt.step * opt.alpha * gsd * gsd;
+    const double smooth_scale = opt.step * opt.beta;
+    const double max_move = opt.max_step_gsd * gsd;
+    const double directions_per_pair = half ? 1.0 : 2.0;
+    const float* confidence_of = confidence.data();
+#pragma omp parallel for schedule(static)
+    for (long v = 0; v < long(nv); ++v) {
+      if (opt.hold_unseen && seen[v] == 0) continue;  // no image constrains it
+      Eigen::Vector3d g = gradient[v];
+      if (opt.normalize_by_pair_count && seen[v] > 1) g /= double(seen[v]);
+      const double confidence =
+          data_confidence
+              ? double(confidence_of[v])
+              : HeightConfidence(seen[v] / directions_per_pair * ctx.mean_pair_information, opt);
+      Eigen::Vector3d move = -photo_scale * g - smooth_scale / confidence * u2[v].cast<double>();
+      if (initial_prior) {
+        Eigen::Vector3d off = (mesh->vertices[v] - start[v]).cast<double>();
+        if (!coarsest) off.x() = off.y() = 0;  // below the coarsest: heights only
+        move -= kInitialPullPerIteration * double(prior_weight[v]) * off;
+      }
+      if (opt.hold_boundary_xy && adjacency.is_boundary[v]) move.x() = move.y() = 0;
+      const double len = move.norm();
+      if (len > max_move) move *= max_move / len;
+      mesh->vertices[v] += move.cast<float>();
+    }
+    if (scene) scene->UpdateVertices(mesh->vertices);
+    stats.times.update_s += SecondsSince(t0);
+    ++stats.iterations;
+    const double done = (opt.levels - level + double(it + 1) / (iterations + 1));
+    ctx.progress.Report(done / (opt.levels + 1), "level " + std::to_string(level));
+  }
+  stats.level_s = SecondsSince(level_start);
+  spdlog::info("level {}: {} vertices, {} faces, GSD {:.2f} m, mean ZNCC {:.4f} -> {:.4f} ({:.1f} s)",
+               level, stats.num_vertices, stats.num_faces, gsd, stats.mean_zncc.front(),
+               stats.mean_zncc.back(), stats.level_s);
+  return true;
+}
+
+}  // namespace satmesh
