@@ -9,8 +9,8 @@
 
 #include "core/common/error.h"
 #include "core/geo/crs.h"
-#include "core/refine/coarse_mesh.h"
 #include "core/mesh/mesh_io.h"
+#include "core/refine/coarse_mesh.h"
 
 namespace satmesh {
 namespace {
@@ -109,7 +109,6 @@ InitialMesh InitialMeshIn(const InitialMesh& mesh, const std::string& crs, doubl
   if (fill_holes_m > 0) {
     const HoleFill fill = FillHoles(fill_holes_m, &out.mesh.points, &out.mesh.faces);
     if (!out.mesh.height_sigma.empty()) out.mesh.height_sigma.resize(out.mesh.points.size(), NAN);
-    out.holes_filled = fill.filled;
     if (fill.filled + fill.too_big > 0)
       spdlog::info("{}: {} hole(s) up to {} m filled ({} faces), {} larger left open, {} covered "
                    "from above left", Where(out), fill.filled, fill_holes_m, fill.faces_added,

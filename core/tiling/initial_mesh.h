@@ -21,7 +21,6 @@ struct InitialMesh {
   std::string crs;        // of `mesh`'s points
   PointMesh mesh;         // double coordinates in `crs`
   MeshDebris repaired;    // removed when read (CleanMesh)
-  size_t holes_filled = 0;  // by InitialMeshIn (FillHoles)
   Eigen::Vector3d min{0, 0, 0}, max{0, 0, 0};  // bounding box in `crs`
 };
 

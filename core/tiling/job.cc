@@ -20,7 +20,6 @@
 namespace satmesh {
 namespace {
 
-
 // Overall progress over tiles refined in parallel: the mean of their fractions.
 class PoolProgress {
  public:
