@@ -210,8 +210,11 @@ TileInput PrepareMeshTileInput(const JobSpec& spec, const JobPlan& plan, const P
   TileInput tile;
   const std::string& crs = plan.dsm.crs_wkt;
   tile.dsm_crs_wkt = crs;
-  PointMesh piece =
-      ClipInitialMesh(InitialMeshIn(ReadInitialMesh(spec), crs, spec.fill_holes_m), t.padded);
+  // The plan's (PlanJob made it once for the job), else made here (a plan from elsewhere).
+  std::shared_ptr<const InitialMesh> mesh = plan.initial_mesh;
+  if (!mesh || mesh->crs != crs)
+    mesh = std::make_shared<const InitialMesh>(InitialMeshIn(ReadInitialMesh(spec), crs, spec.fill_holes_m));
+  PointMesh piece = ClipInitialMesh(*mesh, t.padded);
   if (!spec.initial_dsm.empty()) {
     Dsm dsm = ReadDsmWindow(spec.initial_dsm, t.padded_cells);
     FillDsmHoles(&dsm, spec.fill_holes_m);

@@ -204,7 +204,7 @@ DsmGrid MeshGrid(const JobSpec& spec, const InitialMesh& mesh, const std::vector
 // equal size to a cell, so that no tile needs more memory than its neighbours (a
 // 2500-cell AOI in tiles of up to 1479 cells: 1250 + 1250, not 1479 + 1021).
 void CutTiles(const JobSpec& spec, const std::vector<ImageFootprintModel>& images,
-              const std::optional<InitialMesh>& mesh, int tile_cells, bool balanced,
+              const InitialMesh* mesh, int tile_cells, bool balanced,
               JobPlan* plan_out) {
   JobPlan& plan = *plan_out;
   plan.tiles.clear();
@@ -334,10 +334,10 @@ JobPlan PlanJob(const JobSpec& spec) {
   SATMESH_CHECK(problem.empty(), ErrorCode::kInvalidArgument, "job: " + problem);
   JobPlan plan;
   const std::vector<ImageFootprintModel> images = ReadImageFootprintModels(spec);
-  std::optional<InitialMesh> mesh;
+  std::optional<InitialMesh> read;
   if (!spec.initial_mesh.path.empty()) {
     if (!spec.output_crs.empty()) CheckCrs("outputs.crs", spec.output_crs, kWgs84Geographic3D);
-    mesh = ReadInitialMesh(spec);
+    read = ReadInitialMesh(spec);
   }
   if (!spec.initial_dsm.empty()) {
     plan.dsm = ReadDsmGrid(spec.initial_dsm);
@@ -348,10 +348,13 @@ JobPlan PlanJob(const JobSpec& spec) {
                                                 : "in a geographic CRS (degrees)") +
                       "; satmesh needs a projected CRS in metres (e.g. UTM: gdalwarp -t_srs EPSG:326zz)");
   }
-  const std::string source_crs = mesh ? mesh->crs : plan.dsm.crs_wkt;
-  if (mesh) {
-    mesh = InitialMeshIn(*mesh, spec.initial_dsm.empty() ? MeshPlanCrs(spec, *mesh) : plan.dsm.crs_wkt,
-                         spec.fill_holes_m);
+  const std::string source_crs = read ? read->crs : plan.dsm.crs_wkt;
+  const InitialMesh* mesh = nullptr;
+  if (read) {
+    plan.initial_mesh = std::make_shared<const InitialMesh>(InitialMeshIn(
+        *read, spec.initial_dsm.empty() ? MeshPlanCrs(spec, *read) : plan.dsm.crs_wkt, spec.fill_holes_m));
+    read.reset();
+    mesh = plan.initial_mesh.get();
     CheckMeshSeenByImages(*mesh, images);
     plan.mesh_zmin = mesh->min.z();
     plan.mesh_zmax = mesh->max.z();

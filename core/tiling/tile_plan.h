@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,8 @@
 #include "core/tiling/job_spec.h"
 
 namespace satmesh {
+
+struct InitialMesh;  // initial_mesh.h
 
 // An axis-aligned box in the plan's CRS (the initial DSM's).
 struct Box2d {
@@ -60,6 +63,9 @@ struct JobPlan {
   // Mesh jobs: the initial mesh's lowest and highest point in dsm.crs_wkt (NaN otherwise).
   double mesh_zmin = std::numeric_limits<double>::quiet_NaN();
   double mesh_zmax = std::numeric_limits<double>::quiet_NaN();
+  // Mesh jobs: the initial mesh in dsm.crs_wkt, repaired and its holes filled
+  // (InitialMeshIn), made once by PlanJob and clipped by each tile (null: a tile makes it).
+  std::shared_ptr<const InitialMesh> initial_mesh;
   int IndexOf(int x, int y) const;  // -1 when (x, y) was not planned
 };
 

@@ -16,6 +16,7 @@
 #include "core/mesh/mesh_clean.h"
 #include "core/mesh/mesh_io.h"
 #include "core/synth/scene_writer.h"
+#include "core/tiling/initial_mesh.h"
 #include "core/tiling/job.h"
 #include "core/tiling/tile_input.h"
 #include "proto/job_spec_json.h"
@@ -109,6 +110,28 @@ double MedianAbsDsmError(const std::string& result_dsm, const std::string& truth
   if (diffs.empty()) return INFINITY;
   std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
   return diffs[diffs.size() / 2];
+}
+
+TEST_F(MeshJob, ThePlanPreparesTheMeshOnceAndTilesClipTheSame) {
+  // PlanJob repairs the mesh, fills its holes and puts it in the plan's CRS once; a tile
+  // clips that. A plan without it (made elsewhere) gives the tile the same input.
+  JobSpec spec = Spec();
+  spec.initial_dsm.clear();
+  spec.initial_mesh.path = scene_ + "/truth/mesh.ply";
+  spec.aoi.polygon = SceneAoi();
+  spec.tiling.tile_size_m = 18;
+  const JobPlan plan = PlanJob(spec);
+  ASSERT_TRUE(plan.initial_mesh);
+  EXPECT_EQ(plan.initial_mesh->crs, plan.dsm.crs_wkt);
+  ASSERT_GE(plan.tiles.size(), 2u);
+  JobPlan bare = plan;
+  bare.initial_mesh.reset();
+  for (int i : {0, int(plan.tiles.size()) - 1}) {
+    const TileInput a = PrepareTileInput(spec, plan, i), b = PrepareTileInput(spec, bare, i);
+    ASSERT_GT(a.refine.initial_mesh.num_faces(), 100u);
+    EXPECT_EQ(a.refine.initial_mesh.faces, b.refine.initial_mesh.faces) << i;
+    EXPECT_EQ(a.refine.initial_mesh.vertices, b.refine.initial_mesh.vertices) << i;
+  }
 }
 
 TEST_F(MeshJob, WithoutAnAoiTheTilesCoverWhatTheImagesSee) {
