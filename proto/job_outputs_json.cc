@@ -210,6 +210,8 @@ json TileResultToJson(const JobPlan& plan, const TileResult& t) {
   j["pair_details"] = PairsToJson(t.refine.pair_details);  // views: indices into "views"
   j["candidate_pairs"] = t.refine.candidate_pairs;
   j["kept_initial_share"] = t.refine.kept_initial_share;  // keep_initial_sigmas's last step
+  j["registration_m"] = {t.refine.registration_m.x(), t.refine.registration_m.y(),
+                         t.refine.registration_m.z()};  // its shift to the initial's frame
   j["gsd_m"] = t.refine.gsd_m;
   j["vertices"] = t.core_vertices;
   j["faces"] = t.core_faces;
@@ -253,6 +255,8 @@ TileResult TileResultFromJson(const JobPlan& plan, const json& j) {
   t.refine.gsd_m = j.value("gsd_m", 0.0);
   t.refine.candidate_pairs = j.value("candidate_pairs", 0);
   t.refine.kept_initial_share = j.value("kept_initial_share", 0.0);
+  if (j.contains("registration_m") && j["registration_m"].size() == 3)
+    for (int a = 0; a < 3; ++a) t.refine.registration_m[a] = j["registration_m"][a].get<double>();
   for (const auto& p : j.value("pair_details", json::array())) {
     StereoPair pair;
     pair.i = p.at("views").at(0).get<int>();

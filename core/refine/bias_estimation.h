@@ -8,7 +8,9 @@
 // shift of the block is not observable from the images. Once every view is solved, that
 // shift is fixed by MinimumNormDatum (the biases' a priori weights of an RPC block
 // adjustment without control: the corrections as small as possible), not by the
-// reference view alone.
+// reference view alone; where the result is to sit on the initial surface
+// (RefineOptions::register_to_initial, on for a mesh start), the shift is then searched
+// for where the images agree best on that surface's relief (SurfaceDatum, in the .cc).
 #include <Eigen/Core>
 #include <string>
 #include <utility>
@@ -43,7 +45,8 @@ struct BiasEstimate {
   std::vector<bool> solved;                      // false: no pair with a solved view (bias 0)
   std::vector<double> zncc_before, zncc_after;   // per view: mean ZNCC with solved views, level 0
   std::vector<std::pair<int, int>> pairs;        // the pairs it was estimated over
-  Eigen::Vector2d datum_shift_m{0, 0};           // ground shift (east, north) MinimumNormDatum
+  Eigen::Vector2d datum_shift_m{0, 0};           // ground shift (east, north) the datum
+                                                 // (MinimumNormDatum, then SurfaceDatum)
                                                  // applied to every solved view's correction
 };
 

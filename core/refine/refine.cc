@@ -175,10 +175,13 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
 }
 
 // Step 5: KeepSignificantChanges with keep_initial_sigmas (-1: 2 for a mesh start, off for
-// a DSM start). Refined from the true surface of a multi-date 0.3 m scene, roofs drift by
-// the matching noise to 0.073 m NMAD without it, 0.012 m with it; from a stereo DSM it
-// would undo real corrections the images make only as a whole (stereo 0.5 m roofs 0.79x
-// -> 0.90x of the initial): docs/benchmarks-history.md, session 16.
+// a DSM start), after registering the result to the initial surface (RegisterToInitial).
+// Refined from the true surface of a multi-date 0.3 m scene, roofs drift by the matching
+// noise to 0.073 m NMAD without it, 0.012 m with it; from a stereo DSM it would undo real
+// corrections the images make only as a whole (stereo 0.5 m roofs 0.79x -> 0.90x of the
+// initial): docs/benchmarks-history.md, session 16. The registration: the bias
+// estimation's datum (MinimumNormDatum) put a multi-date 0.5 m block 0.29 m east-north of
+// the true mesh, and the refinement followed the images there (session 17).
 void KeepInitialWithinNoise(const RefineInput& input, const RefineOptions& options,
                             RefineResult* result) {
   const double k = options.keep_initial_sigmas < 0 ? (input.initial_is_mesh ? 2.0 : 0.0)
@@ -187,10 +190,13 @@ void KeepInitialWithinNoise(const RefineInput& input, const RefineOptions& optio
   // Offsets beyond 10 GSDs are changes whatever the noise (and beyond the reach looked at).
   const SignificanceStats stats =
       KeepSignificantChanges(input.initial_mesh, k, 10 * result->gsd_m, options.hold_boundary_xy,
-                             &result->mesh);
+                             options.RegistersToInitial(input.initial_is_mesh), &result->mesh);
   result->kept_initial_share = 1 - stats.mean_gain;
-  spdlog::info("refine: the initial surface kept where the images do not contradict it beyond "
-               "{} sigmas: {:.0f}% of the offsets of {} vertices undone",
+  result->registration_m = stats.registration_m;
+  spdlog::info("refine: registered to the initial surface by ({:+.3f}, {:+.3f}, {:+.3f}) m; "
+               "the initial surface kept where the images do not contradict it beyond {} "
+               "sigmas: {:.0f}% of the offsets of {} vertices undone",
+               -stats.registration_m.x(), -stats.registration_m.y(), -stats.registration_m.z(),
                k, 100 * (1 - stats.mean_gain), stats.vertices);
 }
 

@@ -76,6 +76,10 @@ struct RefineResult {
   // The mean share of the vertices' offsets from the initial surface undone by the last
   // step (RefineOptions::keep_initial_sigmas; 0: off or nothing undone).
   double kept_initial_share = 0;
+  // The same step's translation from the images' datum to the initial surface's frame
+  // (RegisterToInitial), subtracted from the result; the view biases stay in the images'
+  // datum (a mesh shifted back by it agrees with them). Local frame, metres.
+  Eigen::Vector3d registration_m{0, 0, 0};
   double total_s = 0;
 };
 

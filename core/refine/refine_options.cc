@@ -96,6 +96,11 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "(z^4 + this^4), z = offset / its height sigma from the images, so a change within the "
        "images' noise returns to the initial surface; 0: off; -1: 2 for a mesh start (a model "
        "the user trusts, a previous result), off for a DSM start (stereo DSMs err beyond noise)"},
+      {"register_to_initial", &R::register_to_initial, Range::In(-1, 1),
+       "the result in the initial surface's frame: the bias estimation puts the image block "
+       "where its pairs agree best on the initial surface (else the datum of minimum "
+       "corrections), the last step takes off the rigid translation left; 1: on, 0: off, -1: on "
+       "for a mesh start (a model the user trusts), off for a DSM start"},
       {"hold_unseen", &R::hold_unseen, {},
        "vertices no pair-direction sees (occluded, grazing) do not move"},
       {"hold_boundary_xy", &R::hold_boundary_xy, {},

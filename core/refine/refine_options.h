@@ -100,6 +100,12 @@ struct RefineOptions {
                                    // the initial surface unless its offset from it exceeds
                                    // about this many of its height sigmas from the images;
                                    // 0: off; -1: 2 for a mesh start, off for a DSM start
+  int register_to_initial = -1;    // the result in the initial surface's frame: the bias
+                                   // estimation puts the block where the images agree best
+                                   // on the initial surface (SurfaceDatum; else the datum of
+                                   // minimum corrections), and the last step takes off the
+                                   // rigid translation left (RegisterToInitial); 1: on,
+                                   // 0: off, -1: on for a mesh start
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing
@@ -110,6 +116,10 @@ struct RefineOptions {
   PairOptions pairs;
 
   std::string Check() const;
+  // register_to_initial resolved for a mesh start or a DSM start.
+  bool RegistersToInitial(bool initial_is_mesh) const {
+    return register_to_initial < 0 ? initial_is_mesh : register_to_initial > 0;
+  }
 };
 
 // Each refinement option declared once (core/common/option_table.h): wire name (the job's

@@ -1,6 +1,9 @@
 #include "core/refine/significance.h"
 
+#include <Eigen/Cholesky>
+
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "core/common/error.h"
@@ -9,8 +12,45 @@
 
 namespace satmesh {
 
+Eigen::Vector3d RegisterToInitial(const std::vector<Eigen::Vector3f>& normals,
+                                  const std::vector<double>& offsets,
+                                  const std::vector<double>& sigmas, double prior_sigma_m) {
+  SATMESH_CHECK(normals.size() == offsets.size() && sigmas.size() == offsets.size() &&
+                    prior_sigma_m > 0,
+                ErrorCode::kInvalidArgument,
+                "RegisterToInitial: one normal, offset and sigma per vertex; prior sigma > 0");
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  // Cauchy from T = 0 (a shift of several sigmas still pulls), then Tukey's biweight (a
+  // real change beyond 4 sigmas does not pull at all).
+  constexpr int kCauchy = 8, kTukey = 4;
+  for (int it = 0; it < kCauchy + kTukey; ++it) {
+    const bool tukey = it >= kCauchy;
+    Eigen::Matrix3d a = Eigen::Matrix3d::Identity() / (prior_sigma_m * prior_sigma_m);
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    for (size_t v = 0; v < offsets.size(); ++v) {
+      const double s = sigmas[v];
+      if (!(std::isfinite(s) && s > 0) || !std::isfinite(offsets[v])) continue;
+      const Eigen::Vector3d n = normals[v].cast<double>();
+      const double u = (offsets[v] - n.dot(t)) / s;  // residual in sigmas
+      double w;
+      if (!tukey) {
+        w = 1 / (1 + u * u / 4);  // Cauchy, scale 2
+      } else {
+        const double q = u * u / 16;  // Tukey, c = 4
+        w = q < 1 ? (1 - q) * (1 - q) : 0;
+      }
+      w /= s * s;
+      a.noalias() += w * n * n.transpose();
+      b.noalias() += w * offsets[v] * n;
+    }
+    t = a.ldlt().solve(b);
+  }
+  return t;
+}
+
 SignificanceStats KeepSignificantChanges(const TriangleMesh& initial, double k, double max_offset_m,
-                                         bool hold_boundary_xy, TriangleMesh* mesh) {
+                                         bool hold_boundary_xy, bool register_to_initial,
+                                         TriangleMesh* mesh) {
   SATMESH_CHECK(k > 0 && max_offset_m > 0, ErrorCode::kInvalidArgument,
                 "KeepSignificantChanges: k and max_offset_m must be > 0");
   const size_t nv = mesh->vertices.size();
@@ -20,31 +60,50 @@ SignificanceStats KeepSignificantChanges(const TriangleMesh& initial, double k, 
   if (nv == 0 || initial.faces.empty()) return stats;
   const RayScene scene(initial);
   std::vector<Eigen::Vector3f> normals = VertexNormals(*mesh);
+  std::vector<char> held(nv, 0);  // border vertices that move vertically only
   if (hold_boundary_xy) {
     const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
     for (size_t v = 0; v < nv; ++v)
-      if (adjacency.is_boundary[v] && normals[v].squaredNorm() > 0)
+      if (adjacency.is_boundary[v] && normals[v].squaredNorm() > 0) {
         normals[v] = Eigen::Vector3f(0, 0, normals[v].z() >= 0 ? 1.f : -1.f);
+        held[v] = 1;
+      }
   }
+  // Each vertex's offset from the initial surface along its normal: x = x0 + d n, so the
+  // initial surface ahead at t means d = -t (NaN: none within reach).
   std::vector<Ray> rays(2 * nv);
-  for (size_t v = 0; v < nv; ++v) {
-    const float reach = normals[v].squaredNorm() > 0 ? float(max_offset_m) : 0.f;  // none: no hit
-    rays[2 * v] = Ray{mesh->vertices[v], normals[v], 0.f, reach};
-    rays[2 * v + 1] = Ray{mesh->vertices[v], -normals[v], 0.f, reach};
-  }
   std::vector<RayHit> hits(2 * nv);
-  scene.Intersect(rays.data(), hits.data(), rays.size());
+  std::vector<double> offsets(nv);
+  const auto measure_offsets = [&] {
+    for (size_t v = 0; v < nv; ++v) {
+      const float reach = normals[v].squaredNorm() > 0 ? float(max_offset_m) : 0.f;  // none: no hit
+      rays[2 * v] = Ray{mesh->vertices[v], normals[v], 0.f, reach};
+      rays[2 * v + 1] = Ray{mesh->vertices[v], -normals[v], 0.f, reach};
+    }
+    scene.Intersect(rays.data(), hits.data(), rays.size());
+    for (size_t v = 0; v < nv; ++v) {
+      const RayHit& ahead = hits[2 * v];
+      const RayHit& behind = hits[2 * v + 1];
+      if (ahead.hit() && (!behind.hit() || ahead.t <= behind.t)) offsets[v] = -ahead.t;
+      else if (behind.hit()) offsets[v] = behind.t;
+      else offsets[v] = std::numeric_limits<double>::quiet_NaN();
+    }
+  };
+  measure_offsets();
+  const std::vector<double> sigmas(mesh->height_sigma.begin(), mesh->height_sigma.end());
+  if (register_to_initial) {
+    stats.registration_m = RegisterToInitial(normals, offsets, sigmas, max_offset_m);
+    const Eigen::Vector3f t = stats.registration_m.cast<float>();
+    // A held border vertex keeps its outline: the vertical part only.
+    for (size_t v = 0; v < nv; ++v) mesh->vertices[v] -= held[v] ? Eigen::Vector3f(0, 0, t.z()) : t;
+    measure_offsets();
+  }
   const double k4 = k * k * k * k;
   double gain_sum = 0;
   for (size_t v = 0; v < nv; ++v) {
-    const RayHit& ahead = hits[2 * v];
-    const RayHit& behind = hits[2 * v + 1];
-    // x = x0 + d n: the initial surface ahead at t means x0 = x + t n, so d = -t.
-    double d;
-    if (ahead.hit() && (!behind.hit() || ahead.t <= behind.t)) d = -ahead.t;
-    else if (behind.hit()) d = behind.t;
-    else continue;
-    const double sigma = mesh->height_sigma[v];
+    const double d = offsets[v];
+    if (std::isnan(d)) continue;
+    const double sigma = sigmas[v];
     const double z = std::isfinite(sigma) && sigma > 0 ? d / sigma : 0.0;
     const double z4 = z * z * z * z;
     const double gain = z4 / (z4 + k4);

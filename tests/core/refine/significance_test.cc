@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -48,7 +49,8 @@ TEST(KeepSignificantChanges, NoiseReturnsToTheInitialSurfaceARealChangeStays) {
   Refined r = NoisyPlaneWithAChange();
   TriangleMesh mesh = r.refined;
   const SignificanceStats stats =
-      KeepSignificantChanges(r.initial, /*k=*/2, /*max_offset_m=*/3, /*hold_boundary_xy=*/true, &mesh);
+      KeepSignificantChanges(r.initial, /*k=*/2, /*max_offset_m=*/3, /*hold_boundary_xy=*/true,
+                             /*register_to_initial=*/true, &mesh);
   // Vertical rays along the grid's own border edges may miss it: nearly all others hit.
   EXPECT_GT(stats.vertices, mesh.num_vertices() - 4 * 40);
   double noise_before = 0, noise_after = 0;
@@ -62,8 +64,9 @@ TEST(KeepSignificantChanges, NoiseReturnsToTheInitialSurfaceARealChangeStays) {
       noise_before += double(r.noise[v]) * r.noise[v];
       noise_after += double(p.z()) * p.z();
       ++flat;
-      // Stays on the normal through the vertex: x, y barely move on a plane.
-      EXPECT_NEAR(p.x(), r.refined.vertices[v].x(), 0.05f) << v;
+      // Stays on the normal through the vertex (after the registration's shift): x, y
+      // barely move on a plane.
+      EXPECT_NEAR(p.x(), r.refined.vertices[v].x() - stats.registration_m.x(), 0.05f) << v;
     }
   }
   ASSERT_GT(flat, 1000);
@@ -74,6 +77,99 @@ TEST(KeepSignificantChanges, NoiseReturnsToTheInitialSurfaceARealChangeStays) {
   EXPECT_NEAR(mesh.vertices[kUnseen].z(), 0.f, 1e-5f);
   EXPECT_GT(stats.mean_gain, 0.02);
   EXPECT_LT(stats.mean_gain, 0.3);
+  // The registration sees no shift: vertically the noise's mean (0.1 m / sqrt(1681) ~ 2.4
+  // mm), not pulled by the 1 m change; east-north only what the noise tilts the normals by
+  // (~0.1 rad: a standard error of ~2.4 cm; 3 of them).
+  EXPECT_NEAR(stats.registration_m.x(), 0, 0.075);
+  EXPECT_NEAR(stats.registration_m.y(), 0, 0.075);
+  EXPECT_NEAR(stats.registration_m.z(), 0, 0.01);
+}
+
+// A 40 x 40 m grid of 1 m with three 4 m high blocks (walls: normals with east-north
+// parts), refined in a datum shifted by T from the initial's (as the images put it when
+// the bias estimation's datum differs from the mesh's frame), with noise of its sigma
+// (0.05 m) along z and a real change of 1 m on one block's roof.
+TEST(KeepSignificantChanges, TheImagesDatumIsRegisteredToTheInitialSurface) {
+  TriangleMesh initial = testing::CreateGridMesh(40, 1.f);
+  const auto in_block = [](const Eigen::Vector3f& p) {
+    return (p.x() >= 5 && p.x() <= 12 && p.y() >= 6 && p.y() <= 15) ||
+           (p.x() >= 20 && p.x() <= 33 && p.y() >= 22 && p.y() <= 27) ||
+           (p.x() >= 18 && p.x() <= 24 && p.y() >= 5 && p.y() <= 12);
+  };
+  const auto changed = [](const Eigen::Vector3f& p) {  // inside the third block's roof
+    return p.x() >= 19 && p.x() <= 23 && p.y() >= 6 && p.y() <= 11;
+  };
+  for (auto& p : initial.vertices)
+    if (in_block(p)) p.z() = 4.f;
+  const Eigen::Vector3f shift(0.30f, -0.20f, 0.05f);
+  TriangleMesh refined = initial;
+  std::mt19937 gen(3);
+  std::normal_distribution<float> noise(0.f, 0.05f);
+  refined.height_sigma.assign(refined.num_vertices(), 0.05f);
+  for (auto& p : refined.vertices) {
+    if (changed(p)) p.z() += 1.f;
+    p += shift + Eigen::Vector3f(0, 0, noise(gen));
+  }
+  TriangleMesh mesh = refined;
+  const SignificanceStats stats = KeepSignificantChanges(initial, 2, 3, true, true, &mesh);
+  EXPECT_NEAR(stats.registration_m.x(), shift.x(), 0.02);
+  EXPECT_NEAR(stats.registration_m.y(), shift.y(), 0.02);
+  EXPECT_NEAR(stats.registration_m.z(), shift.z(), 0.01);
+  // Back in the initial's frame: away from the border, the vertices are where the initial
+  // surface has them (RMS 0.03 m: the noise, mostly undone); the change stays.
+  double sum_sq = 0;
+  int interior = 0;
+  for (size_t v = 0; v < mesh.num_vertices(); ++v) {
+    const Eigen::Vector3f& p0 = initial.vertices[v];
+    if (p0.x() < 1 || p0.x() > 39 || p0.y() < 1 || p0.y() > 39) continue;
+    ++interior;
+    if (changed(p0)) {
+      EXPECT_NEAR(mesh.vertices[v].z(), p0.z() + 1.f, 0.15f) << v;
+      continue;
+    }
+    sum_sq += (mesh.vertices[v] - p0).squaredNorm();
+  }
+  ASSERT_GT(interior, 1400);
+  EXPECT_LT(std::sqrt(sum_sq / interior), 0.04);
+  // Without the registration the vertices keep the datum's 0.36 m east-north.
+  TriangleMesh unregistered = refined;
+  const SignificanceStats off = KeepSignificantChanges(initial, 2, 3, true, false, &unregistered);
+  EXPECT_EQ(off.registration_m, Eigen::Vector3d::Zero());
+  double sum_sq_off = 0;
+  for (size_t v = 0; v < unregistered.num_vertices(); ++v) {
+    const Eigen::Vector3f& p0 = initial.vertices[v];
+    if (p0.x() < 1 || p0.x() > 39 || p0.y() < 1 || p0.y() > 39 || changed(p0)) continue;
+    sum_sq_off += (unregistered.vertices[v] - p0).squaredNorm();
+  }
+  EXPECT_GT(std::sqrt(sum_sq_off / interior), 0.3);
+}
+
+TEST(RegisterToInitial, RecoversATranslationFromSlopesAndIgnoresOutliers) {
+  // Normals in every direction, offsets n . T plus 5% gross outliers of 2 m.
+  const Eigen::Vector3d t(0.4, -0.3, 0.1);
+  std::mt19937 gen(11);
+  std::normal_distribution<float> g(0.f, 1.f);
+  std::vector<Eigen::Vector3f> normals;
+  std::vector<double> offsets, sigmas;
+  for (int i = 0; i < 2000; ++i) {
+    Eigen::Vector3f n(g(gen), g(gen), g(gen));
+    n.normalize();
+    normals.push_back(n);
+    offsets.push_back(n.cast<double>().dot(t) + 0.02 * g(gen) + (i % 20 == 0 ? 2.0 : 0.0));
+    sigmas.push_back(i % 7 == 0 ? std::numeric_limits<double>::infinity() : 0.02);
+  }
+  const Eigen::Vector3d found = RegisterToInitial(normals, offsets, sigmas, 5.0);
+  EXPECT_NEAR(found.x(), t.x(), 0.005);
+  EXPECT_NEAR(found.y(), t.y(), 0.005);
+  EXPECT_NEAR(found.z(), t.z(), 0.005);
+  // Horizontal normals only: z unobserved, held at 0 by the prior.
+  for (auto& n : normals) n = Eigen::Vector3f(n.x(), n.y(), 0).normalized();
+  for (size_t i = 0; i < offsets.size(); ++i)
+    offsets[i] = normals[i].cast<double>().dot(t);
+  const Eigen::Vector3d flat_z = RegisterToInitial(normals, offsets, sigmas, 5.0);
+  EXPECT_NEAR(flat_z.x(), t.x(), 1e-3);
+  EXPECT_NEAR(flat_z.z(), 0.0, 1e-6);
+  EXPECT_THROW(RegisterToInitial(normals, offsets, {}, 5.0), Error);
 }
 
 TEST(KeepSignificantChanges, OffsetsBeyondReachAndBadArgumentsAreLeftAlone) {
@@ -81,12 +177,12 @@ TEST(KeepSignificantChanges, OffsetsBeyondReachAndBadArgumentsAreLeftAlone) {
   TriangleMesh mesh = r.refined;
   for (auto& p : mesh.vertices) p.z() += 5.f;  // 5 m off: beyond a reach of 3 m
   const TriangleMesh before = mesh;
-  const SignificanceStats stats = KeepSignificantChanges(r.initial, 2, 3, true, &mesh);
+  const SignificanceStats stats = KeepSignificantChanges(r.initial, 2, 3, true, true, &mesh);
   EXPECT_EQ(stats.vertices, 0u);
   for (size_t v = 0; v < mesh.num_vertices(); ++v) EXPECT_EQ(mesh.vertices[v], before.vertices[v]);
-  EXPECT_THROW(KeepSignificantChanges(r.initial, 0, 3, true, &mesh), Error);
+  EXPECT_THROW(KeepSignificantChanges(r.initial, 0, 3, true, true, &mesh), Error);
   mesh.height_sigma.clear();
-  EXPECT_THROW(KeepSignificantChanges(r.initial, 2, 3, true, &mesh), Error);
+  EXPECT_THROW(KeepSignificantChanges(r.initial, 2, 3, true, true, &mesh), Error);
 }
 
 }  // namespace

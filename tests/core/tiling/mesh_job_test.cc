@@ -15,6 +15,7 @@
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_clean.h"
 #include "core/mesh/mesh_io.h"
+#include "core/refine/bias_estimation.h"
 #include "core/synth/scene_writer.h"
 #include "core/tiling/initial_mesh.h"
 #include "core/tiling/job.h"
@@ -132,6 +133,54 @@ TEST_F(MeshJob, ThePlanPreparesTheMeshOnceAndTilesClipTheSame) {
     EXPECT_EQ(a.refine.initial_mesh.faces, b.refine.initial_mesh.faces) << i;
     EXPECT_EQ(a.refine.initial_mesh.vertices, b.refine.initial_mesh.vertices) << i;
   }
+}
+
+// The ground shift t (east, north, metres) by which a bias estimate's block sits off the
+// truth: est_v = -b_v + J_v t for injected biases b_v (least squares over the views; J_v
+// by central differences at the frame's origin).
+Eigen::Vector2d DatumOffTheTruth(const RefineInput& input, const BiasEstimate& e,
+                                 const std::vector<Eigen::Vector2d>& b) {
+  Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+  for (size_t v = 0; v < input.views.size(); ++v) {
+    Eigen::Matrix2d j;
+    for (int axis = 0; axis < 2; ++axis) {
+      Eigen::Vector3d d = Eigen::Vector3d::Zero();
+      d[axis] = 0.5;
+      const RpcModel& rpc = input.views[v].rpc;
+      j.col(axis) = rpc.PixelFromGeo(input.frame.GeoFromLocal(d)) - rpc.PixelFromGeo(input.frame.GeoFromLocal(-d));
+    }
+    normal += j.transpose() * j;
+    rhs += j.transpose() * (e.bias_col_row_px[v] + b[v]);
+  }
+  return normal.inverse() * rhs;
+}
+
+TEST_F(MeshJob, TheImageBlockIsPutOnTheInitialMesh) {
+  // Each image's RPC biased (~1 px, as vendors' are): the pairs see only the differences,
+  // not where the block sits. From the truth mesh (register_to_initial: on for a mesh
+  // start) the block is put where its pairs agree on the mesh, the truth's datum; the
+  // datum of minimum corrections (off) sits where the biases' mean puts it.
+  JobSpec spec = Spec();
+  spec.initial_dsm.clear();
+  spec.initial_mesh.path = scene_ + "/truth/mesh.ply";
+  spec.aoi.polygon = SceneAoi();
+  // Their mean is ~1.4 px: minimum corrections put the block ~0.4 m off.
+  const std::vector<Eigen::Vector2d> b = {{1.4, -0.9}, {0.8, -1.5}, {1.6, -0.4}};
+  ASSERT_EQ(spec.images.size(), b.size());
+  for (size_t i = 0; i < b.size(); ++i) spec.images[i].bias_col_row_px = b[i];
+  const TileInput tile = PrepareTileInput(spec, PlanJob(spec), 0);
+  ASSERT_TRUE(tile.refine.initial_is_mesh);
+  for (size_t i = 0; i < b.size(); ++i) ASSERT_EQ(tile.view_names[i], spec.images[i].path);
+  BiasOptions options;
+  options.refine = spec.refine;
+  const BiasEstimate on = EstimateRefineBiases(tile.refine, options);
+  options.refine.register_to_initial = 0;
+  const BiasEstimate off = EstimateRefineBiases(tile.refine, options);
+  const Eigen::Vector2d t_on = DatumOffTheTruth(tile.refine, on, b);
+  const Eigen::Vector2d t_off = DatumOffTheTruth(tile.refine, off, b);
+  EXPECT_GT(t_off.norm(), 0.15) << t_off.transpose();
+  EXPECT_LT(t_on.norm(), 0.06) << t_on.transpose();
 }
 
 TEST_F(MeshJob, WithoutAnAoiTheTilesCoverWhatTheImagesSee) {
