@@ -37,17 +37,13 @@ struct Problem {
   double gsd_m = 0;
 };
 
-ViewLevel BuildLevel(const Problem& pb, int view, int level, const RpcModel& rpc) {
-  ViewLevel out = MakeViewLevel(view, level, pb.views[view].pyramid[level], rpc,
+ViewLevel BuildLevel(const Problem& pb, int view, int level) {
+  ViewLevel out = MakeViewLevel(view, level, pb.views[view].pyramid[level], pb.rpcs[view],
                                 pb.input.frame, pb.box_min, pb.box_max,
                                 pb.options.refine.virtual_camera_grid_px);
   // With the ray cosines, the warp from this view runs its AVX2 path (warp.h).
   CastHitMap(pb.scene, &out, &pb.normals);
   return out;
-}
-
-ViewLevel BuildLevel(const Problem& pb, int view, int level) {
-  return BuildLevel(pb, view, level, pb.rpcs[view]);
 }
 
 // The level data of solved views (their RPCs no longer change), kept for the views solved
@@ -195,14 +191,51 @@ class ShiftObjective {
 // Mean ZNCC of `pairs` through the fixed initial surface with the whole block shifted by
 // a horizontal ground vector t (metres, east-north): view v's RPC moved by J_v t. On a
 // surface with relief (walls, roof edges) the images agree best where the block sits on
-// it, which the relative biases alone do not fix (MinimumNormDatum). Each shift builds
-// the views' levels afresh (one Embree cast per view); values are cached.
+// it, which the relative biases alone do not fix (MinimumNormDatum). Over the middle of
+// the surface, at most kDatumWindowPx full-resolution pixels across (each view's window
+// cropped to it), for the cost; each shift builds the views' levels afresh (one Embree
+// cast per view); values are cached.
 class DatumObjective {
  public:
+  static constexpr double kDatumWindowPx = 384;
+
   DatumObjective(const Problem& pb, const std::vector<Eigen::Matrix2d>& jacobians,
                  const std::vector<std::pair<int, int>>& pairs, int level)
       : pb_(pb), jacobians_(jacobians), pairs_(pairs), level_(level),
-        photo_(PhotometricOptionsAt(pb.options.refine, pb.gsd_m * std::ldexp(1.0, level))) {}
+        photo_(PhotometricOptionsAt(pb.options.refine, pb.gsd_m * std::ldexp(1.0, level))) {
+    // The middle of the surface's box, and each view's full-resolution window over it
+    // (all heights; a margin for the shifts and the ZNCC window), aligned to the level.
+    const Eigen::Vector3d centre = 0.5 * (pb.box_min + pb.box_max);
+    const double half = 0.5 * kDatumWindowPx * pb.gsd_m;
+    const Eigen::Vector2d box_lo = (centre.head<2>().array() - half).matrix().cwiseMax(pb.box_min.head<2>());
+    const Eigen::Vector2d box_hi = (centre.head<2>().array() + half).matrix().cwiseMin(pb.box_max.head<2>());
+    const int step = 1 << level;
+    for (const auto& [a, b] : pairs)
+      for (int v : {a, b}) {
+        if (crops_.count(v)) continue;
+        Eigen::Vector2d p_min(1e30, 1e30), p_max(-1e30, -1e30);
+        for (int corner = 0; corner < 8; ++corner) {
+          const Eigen::Vector3d local((corner & 1) ? box_hi.x() : box_lo.x(),
+                                      (corner & 2) ? box_hi.y() : box_lo.y(),
+                                      (corner & 4) ? pb.box_max.z() : pb.box_min.z());
+          const Eigen::Vector2d px = pb.rpcs[v].PixelFromGeo(pb.input.frame.GeoFromLocal(local));
+          p_min = p_min.cwiseMin(px), p_max = p_max.cwiseMax(px);
+        }
+        const ImageF& image = pb.views[v].pyramid[level];
+        const double margin = 16 * step;
+        const int c0 = std::max(0, int(std::floor((p_min.x() - margin) / step)));
+        const int r0 = std::max(0, int(std::floor((p_min.y() - margin) / step)));
+        const int c1 = std::min(image.width, int(std::ceil((p_max.x() + margin) / step)));
+        const int r1 = std::min(image.height, int(std::ceil((p_max.y() + margin) / step)));
+        Crop crop;
+        crop.origin_px = Eigen::Vector2d(c0 * step, r0 * step);
+        crop.image = ImageF(std::max(0, c1 - c0), std::max(0, r1 - r0));
+        for (int r = 0; r < crop.image.height; ++r)
+          std::copy_n(&image.pixels[size_t(r0 + r) * image.width + c0], crop.image.width,
+                      &crop.image.pixels[size_t(r) * crop.image.width]);
+        crops_.emplace(v, std::move(crop));
+      }
+  }
 
   double operator()(const Eigen::Vector2d& t) { return Evaluate({t}).front(); }
 
@@ -218,14 +251,22 @@ class DatumObjective {
   }
 
  private:
+  struct Crop {
+    Eigen::Vector2d origin_px;  // full resolution, in the view's window
+    ImageF image;               // at the level
+  };
+
   double Compute(const Eigen::Vector2d& t) {
     std::map<int, ViewLevel> levels;
-    for (const auto& [a, b] : pairs_)
-      for (int v : {a, b})
-        if (!levels.count(v)) {
-          const RpcModel& rpc = pb_.rpcs[v];
-          levels.emplace(v, BuildLevel(pb_, v, level_, rpc.WithBias(rpc.bias() + jacobians_[v] * t)));
-        }
+    for (const auto& [v, crop] : crops_) {
+      if (crop.image.width < 16 || crop.image.height < 16) return -1.0;
+      const RpcModel& rpc = pb_.rpcs[v];
+      const RpcModel shifted = rpc.WithBias(rpc.bias() + jacobians_[v] * t).Cropped(crop.origin_px);
+      ViewLevel level = MakeViewLevel(v, level_, crop.image, shifted, pb_.input.frame, pb_.box_min,
+                                      pb_.box_max, pb_.options.refine.virtual_camera_grid_px);
+      CastHitMap(pb_.scene, &level, &pb_.normals);
+      levels.emplace(v, std::move(level));
+    }
     double sum = 0;
     long windows = 0;
     for (const auto& [a, b] : pairs_) {
@@ -242,6 +283,7 @@ class DatumObjective {
   std::vector<std::pair<int, int>> pairs_;
   int level_;
   PhotometricOptions photo_;
+  std::map<int, Crop> crops_;
   PairWorkspace workspace_;
   std::map<std::pair<long, long>, double> cache_;
 };
