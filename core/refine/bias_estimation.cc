@@ -514,13 +514,20 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
         DatumJacobians(rpcs, input.frame, 0.5 * (pb.box_min + pb.box_max));
     const Eigen::Vector2d t0 = out.datum_shift_m;
     double before = 0, after = 0;
-    const Eigen::Vector2d t = SurfaceDatum(pb, jacobians, datum_pairs, t0, coarse_level, progress,
-                                           &before, &after);
+    Eigen::Vector2d t = SurfaceDatum(pb, jacobians, datum_pairs, t0, coarse_level, progress,
+                                     &before, &after);
+    // Where the surface has too little relief to tell (a plane: the objective is flat but
+    // for its noise), minimum corrections stay.
+    constexpr double kDatumMargin = 0.002;
+    const bool observed = after > before + kDatumMargin;
+    if (!observed) t = t0;
     for (int v = 0; v < nv; ++v)
       if (out.solved[v]) out.bias_col_row_px[v] += jacobians[v] * (t - t0);
     out.datum_shift_m = t;
-    spdlog::info("bias: datum on the initial surface: the block shifted by ({:+.3f}, {:+.3f}) m "
-                 "(east, north) from the reference view's; mean ZNCC of {} pairs {:.4f} -> {:.4f}",
+    spdlog::info("bias: datum on the initial surface: {} ({:+.3f}, {:+.3f}) m (east, north) from "
+                 "the reference view's; mean ZNCC of {} pairs {:.4f} -> {:.4f}",
+                 observed ? "the block shifted by" : "not observed beyond " + std::to_string(kDatumMargin) +
+                                                         "; minimum corrections kept at",
                  t.x(), t.y(), datum_pairs.size(), before, after);
   }
   return out;

@@ -159,3 +159,26 @@ TEST(EstimateViewBiases, BadPairThrows) {
 
 }  // namespace
 }  // namespace satmesh
+
+namespace satmesh {
+namespace {
+
+TEST(EstimateViewBiases, OnAFlatMeshTheDatumStaysAtMinimumCorrections) {
+  // A mesh start (register_to_initial: on) over a plane: a common ground shift of the
+  // block changes nothing the pairs can see, so the block stays at the datum of minimum
+  // corrections rather than wandering with the objective's noise.
+  RefineInput input = PlaneInput();
+  input.initial_is_mesh = true;
+  const std::vector<Eigen::Vector2d> b = {{1.4, -0.9}, {0.8, -1.5}, {1.6, -0.4}};
+  for (int v = 0; v < 3; ++v) input.views[v].rpc = input.views[v].rpc.WithBias(b[v]);
+  BiasOptions options;
+  const BiasEstimate on = EstimateViewBiases(input, kAllPairs, options);
+  options.refine.register_to_initial = 0;
+  const BiasEstimate off = EstimateViewBiases(input, kAllPairs, options);
+  EXPECT_GT(off.datum_shift_m.norm(), 0.03);  // not the reference view's datum
+  EXPECT_LT((on.datum_shift_m - off.datum_shift_m).norm(), 1e-9)
+      << on.datum_shift_m.transpose() << " vs " << off.datum_shift_m.transpose();
+}
+
+}  // namespace
+}  // namespace satmesh
