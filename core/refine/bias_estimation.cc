@@ -371,8 +371,8 @@ std::vector<Eigen::Matrix2d> DatumJacobians(const std::vector<RpcModel>& rpcs,
 // The block's common ground shift t on the initial surface (DatumObjective), from t0:
 // 3x3 quadratic steps of 1 and 0.5 GSD at level 1, then 0.25 and 0.125 GSD at full
 // resolution (all four there for small images; level 1 alone leaves ~0.15 m where full
-// resolution finds the datum to ~0.05 m, a multi-date 0.5 m scene, session 17). Returns t; the mean ZNCC at t0 and at t
-// (level 0) in *zncc_before, *zncc_after.
+// resolution finds the datum to ~0.05 m, a multi-date 0.5 m scene, session 17). Returns
+// t; the mean ZNCC at t0 and at t (level 0) in *zncc_before, *zncc_after.
 Eigen::Vector2d SurfaceDatum(const Problem& pb, const std::vector<Eigen::Matrix2d>& jacobians,
                              const std::vector<std::pair<int, int>>& pairs,
                              const Eigen::Vector2d& t0, int coarse_level,
@@ -493,11 +493,13 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
                  view, input.views[view].name, best_neighbours.size(), d.x(), d.y(),
                  out.zncc_before[view], out.zncc_after[view]);
   }
+  // The datum: the input's RPCs (before this estimate) give the Jacobians; the bias
+  // barely changes them.
+  std::vector<RpcModel> input_rpcs;
+  for (const auto& v : views) input_rpcs.push_back(v.rpc);
+  const Eigen::Vector3d centre = 0.5 * (pb.box_min + pb.box_max);
   if (options.minimum_norm_datum) {
-    // The input's RPCs (before this estimate) give the Jacobians; the bias barely changes them.
-    std::vector<RpcModel> rpcs;
-    for (const auto& v : views) rpcs.push_back(v.rpc);
-    MinimumNormDatum(rpcs, input.frame, 0.5 * (pb.box_min + pb.box_max), &out);
+    MinimumNormDatum(input_rpcs, input.frame, centre, &out);
     spdlog::info("bias: datum of minimum corrections: the block shifted by ({:+.3f}, {:+.3f}) m "
                  "(east, north) from the reference view's", out.datum_shift_m.x(), out.datum_shift_m.y());
   }
@@ -508,10 +510,7 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
     std::vector<std::pair<int, int>> datum_pairs;
     for (const auto& [a, b] : pairs)
       if (out.solved[a] && out.solved[b] && datum_pairs.size() < kDatumPairs) datum_pairs.push_back({a, b});
-    std::vector<RpcModel> rpcs;
-    for (const auto& v : views) rpcs.push_back(v.rpc);
-    const std::vector<Eigen::Matrix2d> jacobians =
-        DatumJacobians(rpcs, input.frame, 0.5 * (pb.box_min + pb.box_max));
+    const std::vector<Eigen::Matrix2d> jacobians = DatumJacobians(input_rpcs, input.frame, centre);
     const Eigen::Vector2d t0 = out.datum_shift_m;
     double before = 0, after = 0;
     Eigen::Vector2d t = SurfaceDatum(pb, jacobians, datum_pairs, t0, coarse_level, progress,
@@ -525,10 +524,10 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
       if (out.solved[v]) out.bias_col_row_px[v] += jacobians[v] * (t - t0);
     out.datum_shift_m = t;
     spdlog::info("bias: datum on the initial surface: {} ({:+.3f}, {:+.3f}) m (east, north) from "
-                 "the reference view's; mean ZNCC of {} pairs {:.4f} -> {:.4f}",
-                 observed ? "the block shifted by" : "not observed beyond " + std::to_string(kDatumMargin) +
-                                                         "; minimum corrections kept at",
-                 t.x(), t.y(), datum_pairs.size(), before, after);
+                 "the reference view's; mean ZNCC of {} pairs {:.4f} -> {:.4f}{}",
+                 observed ? "the block shifted by" : "minimum corrections kept at", t.x(), t.y(),
+                 datum_pairs.size(), before, after,
+                 observed ? "" : fmt::format(" (not above {:.3f})", before + kDatumMargin));
   }
   return out;
 }

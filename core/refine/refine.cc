@@ -179,9 +179,9 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
 // Refined from the true surface of a multi-date 0.3 m scene, roofs drift by the matching
 // noise to 0.073 m NMAD without it, 0.012 m with it; from a stereo DSM it would undo real
 // corrections the images make only as a whole (stereo 0.5 m roofs 0.79x -> 0.90x of the
-// initial): docs/benchmarks-history.md, session 16. The registration: the bias
-// estimation's datum (MinimumNormDatum) put a multi-date 0.5 m block 0.29 m east-north of
-// the true mesh, and the refinement followed the images there (session 17).
+// initial): docs/benchmarks-history.md, session 16. The registration takes off what the
+// block's datum leaves (SurfaceDatum finds it to 0.04-0.07 m; minimum corrections put a
+// multi-date 0.5 m block 0.26 m off the true mesh, and the refinement followed: session 17).
 void KeepInitialWithinNoise(const RefineInput& input, const RefineOptions& options,
                             RefineResult* result) {
   const double k = options.keep_initial_sigmas < 0 ? (input.initial_is_mesh ? 2.0 : 0.0)
