@@ -13,9 +13,11 @@
 
 #include "core/common/error.h"
 #include "core/raycast/ray_scene.h"
+#include "core/refine/block_datum.h"
 #include "core/refine/pairs.h"
 #include "core/mesh/topology.h"
 #include "core/refine/photometric_gradient.h"
+#include "core/refine/quadratic_step.h"
 #include "core/refine/view_level.h"
 #include "core/refine/view_setup.h"
 #include "core/refine/virtual_camera.h"
@@ -188,139 +190,6 @@ class ShiftObjective {
   std::map<std::pair<long, long>, double> cache_;
 };
 
-// Mean ZNCC of `pairs` through the fixed initial surface with the whole block shifted by
-// a horizontal ground vector t (metres, east-north): view v's RPC moved by J_v t. On a
-// surface with relief (walls, roof edges) the images agree best where the block sits on
-// it, which the relative biases alone do not fix (MinimumNormDatum). Over the middle of
-// the surface, at most kDatumWindowPx full-resolution pixels across (each view's window
-// cropped to it), for the cost; each shift builds the views' levels afresh (one Embree
-// cast per view); values are cached.
-class DatumObjective {
- public:
-  static constexpr double kDatumWindowPx = 384;
-
-  DatumObjective(const Problem& pb, const std::vector<Eigen::Matrix2d>& jacobians,
-                 const std::vector<std::pair<int, int>>& pairs, int level)
-      : pb_(pb), jacobians_(jacobians), pairs_(pairs), level_(level),
-        photo_(PhotometricOptionsAt(pb.options.refine, pb.gsd_m * std::ldexp(1.0, level))) {
-    // The middle of the surface's box, and each view's full-resolution window over it
-    // (all heights; a margin for the shifts and the ZNCC window), aligned to the level.
-    const Eigen::Vector3d centre = 0.5 * (pb.box_min + pb.box_max);
-    const double half = 0.5 * kDatumWindowPx * pb.gsd_m;
-    const Eigen::Vector2d box_lo = (centre.head<2>().array() - half).matrix().cwiseMax(pb.box_min.head<2>());
-    const Eigen::Vector2d box_hi = (centre.head<2>().array() + half).matrix().cwiseMin(pb.box_max.head<2>());
-    const int step = 1 << level;
-    for (const auto& [a, b] : pairs)
-      for (int v : {a, b}) {
-        if (crops_.count(v)) continue;
-        Eigen::Vector2d p_min(1e30, 1e30), p_max(-1e30, -1e30);
-        for (int corner = 0; corner < 8; ++corner) {
-          const Eigen::Vector3d local((corner & 1) ? box_hi.x() : box_lo.x(),
-                                      (corner & 2) ? box_hi.y() : box_lo.y(),
-                                      (corner & 4) ? pb.box_max.z() : pb.box_min.z());
-          const Eigen::Vector2d px = pb.rpcs[v].PixelFromGeo(pb.input.frame.GeoFromLocal(local));
-          p_min = p_min.cwiseMin(px), p_max = p_max.cwiseMax(px);
-        }
-        const ImageF& image = pb.views[v].pyramid[level];
-        const double margin = 16 * step;
-        const int c0 = std::max(0, int(std::floor((p_min.x() - margin) / step)));
-        const int r0 = std::max(0, int(std::floor((p_min.y() - margin) / step)));
-        const int c1 = std::min(image.width, int(std::ceil((p_max.x() + margin) / step)));
-        const int r1 = std::min(image.height, int(std::ceil((p_max.y() + margin) / step)));
-        Crop crop;
-        crop.origin_px = Eigen::Vector2d(c0 * step, r0 * step);
-        crop.image = ImageF(std::max(0, c1 - c0), std::max(0, r1 - r0));
-        for (int r = 0; r < crop.image.height; ++r)
-          std::copy_n(&image.pixels[size_t(r0 + r) * image.width + c0], crop.image.width,
-                      &crop.image.pixels[size_t(r) * crop.image.width]);
-        crops_.emplace(v, std::move(crop));
-      }
-  }
-
-  double operator()(const Eigen::Vector2d& t) { return Evaluate({t}).front(); }
-
-  std::vector<double> Evaluate(const std::vector<Eigen::Vector2d>& shifts) {
-    std::vector<double> out;
-    for (const Eigen::Vector2d& t : shifts) {
-      const auto key = std::make_pair(std::lround(t.x() * 1e6), std::lround(t.y() * 1e6));
-      auto it = cache_.find(key);
-      if (it == cache_.end()) it = cache_.emplace(key, Compute(t)).first;
-      out.push_back(it->second);
-    }
-    return out;
-  }
-
- private:
-  struct Crop {
-    Eigen::Vector2d origin_px;  // full resolution, in the view's window
-    ImageF image;               // at the level
-  };
-
-  double Compute(const Eigen::Vector2d& t) {
-    std::map<int, ViewLevel> levels;
-    for (const auto& [v, crop] : crops_) {
-      if (crop.image.width < 16 || crop.image.height < 16) return -1.0;
-      const RpcModel& rpc = pb_.rpcs[v];
-      const RpcModel shifted = rpc.WithBias(rpc.bias() + jacobians_[v] * t).Cropped(crop.origin_px);
-      ViewLevel level = MakeViewLevel(v, level_, crop.image, shifted, pb_.input.frame, pb_.box_min,
-                                      pb_.box_max, pb_.options.refine.virtual_camera_grid_px);
-      CastHitMap(pb_.scene, &level, &pb_.normals);
-      levels.emplace(v, std::move(level));
-    }
-    double sum = 0;
-    long windows = 0;
-    for (const auto& [a, b] : pairs_) {
-      const PairEnergy e =
-          AccumulatePairGradient(levels.at(a), levels.at(b), pb_.normals, photo_, nullptr, &workspace_);
-      sum += e.sum_zncc;
-      windows += e.num_windows;
-    }
-    return windows >= 16 ? sum / double(windows) : -1.0;
-  }
-
-  const Problem& pb_;
-  const std::vector<Eigen::Matrix2d>& jacobians_;
-  std::vector<std::pair<int, int>> pairs_;
-  int level_;
-  PhotometricOptions photo_;
-  std::map<int, Crop> crops_;
-  PairWorkspace workspace_;
-  std::map<std::pair<long, long>, double> cache_;
-};
-
-// One 3x3 step at spacing h: a quadratic fit (least squares on the 9 values); its maximum
-// if the fit is concave (clamped to +-h per axis), else the best of the 9.
-template <typename Objective>  // ShiftObjective, DatumObjective
-Eigen::Vector2d QuadraticStep(Objective& f, const Eigen::Vector2d& d, double h) {
-  std::vector<Eigen::Vector2d> points;
-  for (int j = 0; j < 3; ++j)
-    for (int i = 0; i < 3; ++i) points.push_back(d + h * Eigen::Vector2d(i - 1, j - 1));
-  const std::vector<double> values = f.Evaluate(points);
-  double v[3][3];
-  Eigen::Vector2d best = d;
-  double best_value = -1e30;
-  for (int j = 0; j < 3; ++j) {
-    for (int i = 0; i < 3; ++i) {
-      v[j][i] = values[3 * j + i];
-      if (v[j][i] > best_value) best_value = v[j][i], best = points[3 * j + i];
-    }
-  }
-  double gx = 0, gy = 0, hxx = 0, hyy = 0;
-  for (int k = 0; k < 3; ++k) {
-    gx += (v[k][2] - v[k][0]) / (6 * h);
-    gy += (v[2][k] - v[0][k]) / (6 * h);
-    hxx += (v[k][2] - 2 * v[k][1] + v[k][0]) / (3 * h * h);
-    hyy += (v[2][k] - 2 * v[1][k] + v[0][k]) / (3 * h * h);
-  }
-  const double hxy = (v[2][2] - v[0][2] - v[2][0] + v[0][0]) / (4 * h * h);
-  Eigen::Matrix2d hessian;
-  hessian << hxx, hxy, hxy, hyy;
-  if (!(hxx < 0 && hessian.determinant() > 0)) return best;
-  const Eigen::Vector2d step = (-hessian.inverse() * Eigen::Vector2d(gx, gy)).cwiseMax(-h).cwiseMin(h);
-  const Eigen::Vector2d candidate = d + step;
-  return f(candidate) >= best_value ? candidate : best;
-}
-
 // Coarse grid search, then 3x3 quadratic steps level by level down to full resolution.
 Eigen::Vector2d SolveView(const Problem& pb, SolvedLevels* solved, int view,
                           const std::vector<int>& neighbours,
@@ -351,45 +220,6 @@ Eigen::Vector2d SolveView(const Problem& pb, SolvedLevels* solved, int view,
     }
   }
   return d;
-}
-
-// d(col, row) / d(east, north) of each view at `center` (a point of the local frame), px
-// per metre: how a common ground shift of the block moves each view's correction.
-std::vector<Eigen::Matrix2d> DatumJacobians(const std::vector<RpcModel>& rpcs,
-                                            const LocalFrame& frame, const Eigen::Vector3d& center) {
-  const Eigen::Vector3d geo = frame.GeoFromLocal(center);
-  const Eigen::Vector3d scale = frame.GeoFromLocalScale();
-  std::vector<Eigen::Matrix2d> jacobians;
-  for (const RpcModel& rpc : rpcs) {
-    Eigen::Matrix<double, 2, 3> j_geo;
-    rpc.PixelFromGeo(geo, &j_geo);
-    jacobians.push_back(j_geo.leftCols<2>() * scale.head<2>().asDiagonal());
-  }
-  return jacobians;
-}
-
-// The block's common ground shift t on the initial surface (DatumObjective), from t0:
-// 3x3 quadratic steps of 1 and 0.5 GSD at level 1, then 0.25 and 0.125 GSD at full
-// resolution (all four there for small images; level 1 alone leaves ~0.15 m where full
-// resolution finds the datum to ~0.05 m, a multi-date 0.5 m scene, session 17). Returns
-// t; the mean ZNCC at t0 and at t (level 0) in *zncc_before, *zncc_after.
-Eigen::Vector2d SurfaceDatum(const Problem& pb, const std::vector<Eigen::Matrix2d>& jacobians,
-                             const std::vector<std::pair<int, int>>& pairs,
-                             const Eigen::Vector2d& t0, int coarse_level,
-                             const Progress& progress, double* zncc_before, double* zncc_after) {
-  Eigen::Vector2d t = t0;
-  const int upper = std::min(1, coarse_level);
-  for (int level = upper; level >= 0; --level) {
-    progress.ThrowIfCancelled();
-    DatumObjective f(pb, jacobians, pairs, level);
-    if (level == 0) *zncc_before = f(t0);
-    std::vector<double> steps_gsd;
-    if (level > 0 || upper == 0) steps_gsd.insert(steps_gsd.end(), {1.0, 0.5});
-    if (level == 0) steps_gsd.insert(steps_gsd.end(), {0.25, 0.125});
-    for (double h : steps_gsd) t = QuadraticStep(f, t, h * pb.gsd_m);
-    if (level == 0) *zncc_after = f(t);
-  }
-  return t;
 }
 
 int ReferenceView(const std::vector<std::pair<int, int>>& pairs, int num_views, int requested) {
@@ -512,9 +342,12 @@ BiasEstimate EstimateViewBiases(const RefineInput& input, const std::vector<Prep
       if (out.solved[a] && out.solved[b] && datum_pairs.size() < kDatumPairs) datum_pairs.push_back({a, b});
     const std::vector<Eigen::Matrix2d> jacobians = DatumJacobians(input_rpcs, input.frame, centre);
     const Eigen::Vector2d t0 = out.datum_shift_m;
-    double before = 0, after = 0;
-    Eigen::Vector2d t = SurfaceDatum(pb, jacobians, datum_pairs, t0, coarse_level, progress,
-                                     &before, &after);
+    const DatumProblem problem{views,     pb.rpcs,    input.frame,   scene,   pb.normals,
+                               pb.box_min, pb.box_max, options.refine, pb.gsd_m};
+    const SurfaceDatumResult found =
+        SurfaceDatum(problem, jacobians, datum_pairs, t0, coarse_level, progress);
+    const double before = found.zncc_before, after = found.zncc_after;
+    Eigen::Vector2d t = found.t;
     // Where the surface has too little relief to tell (a plane: the objective is flat but
     // for its noise), minimum corrections stay.
     constexpr double kDatumMargin = 0.002;
