@@ -144,7 +144,7 @@ ExecutionPlan RealExecutor::Plan(const JobSpec& spec) {
 
 json RealExecutor::RunTile(const JobSpec& spec, const TileKey& key, const std::string& job_dir,
                            const Progress& progress) {
-  JobPlan plan = PlanJob(spec);
+  JobPlan plan = *plans_.Get(job_dir, [&] { return PlanJob(spec); });  // a copy (the budget)
   const int index = plan.IndexOf(key.x, key.y);
   SATMESH_CHECK(index >= 0, ErrorCode::kInternal, "tile " + key.Name() + " is not in the job's plan");
   if (tile_memory_budget_mb_ > 0) plan.memory_budget_mb = tile_memory_budget_mb_;
@@ -174,7 +174,8 @@ json RealExecutor::RunTile(const JobSpec& spec, const TileKey& key, const std::s
 
 json RealExecutor::Assemble(const JobSpec& spec, const std::vector<TileKey>& tiles,
                             const std::vector<json>& tile_results, const std::string& job_dir) {
-  const JobPlan plan = PlanJob(spec);
+  const std::shared_ptr<const JobPlan> shared = plans_.Get(job_dir, [&] { return PlanJob(spec); });
+  const JobPlan& plan = *shared;
   std::vector<TileResult> results(plan.tiles.size());
   double first_start = UnixSeconds();
   for (const json& r : tile_results) {

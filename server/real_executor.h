@@ -1,6 +1,7 @@
 #pragma once
 // The production engine: the core tiling runner behind the JobExecutor interface.
 #include "server/executor.h"
+#include "server/plan_cache.h"
 
 namespace satmesh::server {
 
@@ -27,6 +28,7 @@ class RealExecutor : public JobExecutor {
 
  private:
   double tile_memory_budget_mb_ = 0;
+  PlanCache plans_;  // by job directory: the tiles of a job and its assembly share one plan
 };
 
 // Writes a minimal 3D Tiles 1.1 tileset.json listing tiles/<x>_<y>.glb under one root,

@@ -8,6 +8,7 @@
 
 #include "core/common/error.h"
 #include "server/inputs.h"
+#include "server/plan_cache.h"
 #include "server/problem.h"
 #include "server/store.h"
 #include "tests/server/test_server.h"
@@ -22,6 +23,35 @@ int StatusOf(const std::function<void()>& f) {
     return ProblemFromException(std::current_exception()).status;
   }
   return 0;
+}
+
+TEST(PlanCache, MakesAJobsPlanOnceAndDropsTheLeastRecentlyUsed) {
+  PlanCache cache(2);
+  int made = 0;
+  const auto make = [&made](int nx) {
+    return [&made, nx] {
+      ++made;
+      JobPlan plan;
+      plan.nx = nx;
+      return plan;
+    };
+  };
+  const auto a = cache.Get("jobs/a", make(1));
+  EXPECT_EQ(cache.Get("jobs/a", make(99)), a);  // the same plan, not made again
+  EXPECT_EQ(made, 1);
+  EXPECT_EQ(a->nx, 1);
+  cache.Get("jobs/b", make(2));
+  cache.Get("jobs/a", make(99));  // a is the most recent again
+  cache.Get("jobs/c", make(3));   // drops b
+  EXPECT_EQ(made, 3);
+  EXPECT_EQ(cache.Get("jobs/a", make(99))->nx, 1);
+  EXPECT_EQ(cache.Get("jobs/b", make(4))->nx, 4);  // made again
+  EXPECT_EQ(made, 4);
+  EXPECT_EQ(a->nx, 1);  // a plan handed out stays valid whatever is dropped
+  // A failed plan caches nothing.
+  EXPECT_THROW(cache.Get("jobs/d", [] () -> JobPlan { ThrowError(ErrorCode::kInvalidInput, "bad"); }),
+               Error);
+  EXPECT_EQ(cache.Get("jobs/d", make(5))->nx, 5);
 }
 
 TEST(ProblemFromException, MapsErrorCodesToHttpStatus) {
