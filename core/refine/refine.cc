@@ -186,18 +186,22 @@ void KeepInitialWithinNoise(const RefineInput& input, const RefineOptions& optio
                             RefineResult* result) {
   const double k = options.keep_initial_sigmas < 0 ? (input.initial_is_mesh ? 2.0 : 0.0)
                                                    : options.keep_initial_sigmas;
-  if (!(k > 0) || result->mesh.height_sigma.size() != result->mesh.num_vertices()) return;
+  const bool registers = options.RegistersToInitial(input.initial_is_mesh);
+  if (!(k > 0 || registers) || result->mesh.height_sigma.size() != result->mesh.num_vertices())
+    return;
   // Offsets beyond 10 GSDs are changes whatever the noise (and beyond the reach looked at).
   const SignificanceStats stats =
-      KeepSignificantChanges(input.initial_mesh, k, 10 * result->gsd_m, options.hold_boundary_xy,
-                             options.RegistersToInitial(input.initial_is_mesh), &result->mesh);
+      KeepSignificantChanges(input.initial_mesh, k > 0 ? k : 0.0, 10 * result->gsd_m,
+                             options.hold_boundary_xy, registers, &result->mesh);
   result->kept_initial_share = 1 - stats.mean_gain;
   result->registration_m = stats.registration_m;
-  spdlog::info("refine: registered to the initial surface by ({:+.3f}, {:+.3f}, {:+.3f}) m; "
-               "the initial surface kept where the images do not contradict it beyond {} "
-               "sigmas: {:.0f}% of the offsets of {} vertices undone",
-               -stats.registration_m.x(), -stats.registration_m.y(), -stats.registration_m.z(),
-               k, 100 * (1 - stats.mean_gain), stats.vertices);
+  if (registers)
+    spdlog::info("refine: registered to the initial surface by ({:+.3f}, {:+.3f}, {:+.3f}) m",
+                 -stats.registration_m.x(), -stats.registration_m.y(), -stats.registration_m.z());
+  if (k > 0)
+    spdlog::info("refine: the initial surface kept where the images do not contradict it beyond "
+                 "{} sigmas: {:.0f}% of the offsets of {} vertices undone",
+                 k, 100 * (1 - stats.mean_gain), stats.vertices);
 }
 
 }  // namespace

@@ -51,8 +51,10 @@ Eigen::Vector3d RegisterToInitial(const std::vector<Eigen::Vector3f>& normals,
 SignificanceStats KeepSignificantChanges(const TriangleMesh& initial, double k, double max_offset_m,
                                          bool hold_boundary_xy, bool register_to_initial,
                                          TriangleMesh* mesh) {
-  SATMESH_CHECK(k > 0 && max_offset_m > 0, ErrorCode::kInvalidArgument,
-                "KeepSignificantChanges: k and max_offset_m must be > 0");
+  SATMESH_CHECK((k > 0 || (k == 0 && register_to_initial)) && max_offset_m > 0,
+                ErrorCode::kInvalidArgument,
+                "KeepSignificantChanges: k must be > 0 (0 only with the registration), "
+                "max_offset_m > 0");
   const size_t nv = mesh->vertices.size();
   SATMESH_CHECK(mesh->height_sigma.size() == nv, ErrorCode::kInvalidArgument,
                 "KeepSignificantChanges: the mesh has no height sigma per vertex");
@@ -106,7 +108,7 @@ SignificanceStats KeepSignificantChanges(const TriangleMesh& initial, double k, 
     const double sigma = sigmas[v];
     const double z = std::isfinite(sigma) && sigma > 0 ? d / sigma : 0.0;
     const double z4 = z * z * z * z;
-    const double gain = z4 / (z4 + k4);
+    const double gain = k4 > 0 ? z4 / (z4 + k4) : 1.0;  // k = 0: the registration only
     mesh->vertices[v] -= float((1 - gain) * d) * normals[v];
     gain_sum += gain;
     ++stats.vertices;

@@ -36,7 +36,8 @@ Eigen::Vector3d RegisterToInitial(const std::vector<Eigen::Vector3f>& normals,
 // about k sigmas, which the images' noise alone makes, returns to the initial surface; a
 // larger one stays (at 2k, 94% of it). A vertex no image sees (sigma infinite) returns to
 // the initial surface. hold_boundary_xy: the mesh's border vertices (tile edges) move
-// vertically instead, so the outline stays where it is. Both meshes in the same frame; k > 0.
+// vertically instead, so the outline stays where it is. Both meshes in the same frame;
+// k > 0, or k = 0 with register_to_initial (the registration alone, every offset kept).
 // register_to_initial: first the translation RegisterToInitial finds (prior sigma
 // max_offset_m) is taken off the whole mesh (border vertices: its vertical part) and the
 // offsets, so the result is the initial surface's frame, changed where the images say so.

@@ -142,6 +142,21 @@ TEST(KeepSignificantChanges, TheImagesDatumIsRegisteredToTheInitialSurface) {
     sum_sq_off += (unregistered.vertices[v] - p0).squaredNorm();
   }
   EXPECT_GT(std::sqrt(sum_sq_off / interior), 0.3);
+
+  // k = 0 (keep_initial_sigmas 0 on a mesh start): the registration alone, every offset
+  // kept: the refined surface moved back by the translation, noise and change included.
+  TriangleMesh only_registered = refined;
+  const SignificanceStats only = KeepSignificantChanges(initial, 0, 3, true, true, &only_registered);
+  EXPECT_EQ(only.registration_m, stats.registration_m);
+  EXPECT_DOUBLE_EQ(only.mean_gain, 1.0);
+  const Eigen::Vector3f t = only.registration_m.cast<float>();
+  for (size_t v = 0; v < only_registered.num_vertices(); ++v) {
+    const Eigen::Vector3f& p0 = initial.vertices[v];
+    if (p0.x() < 1 || p0.x() > 39 || p0.y() < 1 || p0.y() > 39) continue;  // border: z only
+    EXPECT_LT((only_registered.vertices[v] - (refined.vertices[v] - t)).norm(), 1e-5f) << v;
+  }
+  TriangleMesh unchanged = refined;
+  EXPECT_THROW(KeepSignificantChanges(initial, 0, 3, true, false, &unchanged), Error);
 }
 
 TEST(RegisterToInitial, RecoversATranslationFromSlopesAndIgnoresOutliers) {
@@ -180,7 +195,8 @@ TEST(KeepSignificantChanges, OffsetsBeyondReachAndBadArgumentsAreLeftAlone) {
   const SignificanceStats stats = KeepSignificantChanges(r.initial, 2, 3, true, true, &mesh);
   EXPECT_EQ(stats.vertices, 0u);
   for (size_t v = 0; v < mesh.num_vertices(); ++v) EXPECT_EQ(mesh.vertices[v], before.vertices[v]);
-  EXPECT_THROW(KeepSignificantChanges(r.initial, 0, 3, true, true, &mesh), Error);
+  EXPECT_THROW(KeepSignificantChanges(r.initial, 0, 3, true, false, &mesh), Error);  // nothing to do
+  EXPECT_THROW(KeepSignificantChanges(r.initial, -1, 3, true, true, &mesh), Error);
   mesh.height_sigma.clear();
   EXPECT_THROW(KeepSignificantChanges(r.initial, 2, 3, true, true, &mesh), Error);
 }
