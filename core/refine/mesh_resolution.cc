@@ -1,5 +1,6 @@
 #include "core/refine/mesh_resolution.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -39,6 +40,71 @@ std::vector<char> FacesToSubdivide(const TriangleMesh& mesh, double tolerance_m)
   for (size_t f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) marked[f] |= near_seed[mesh.faces[f][k]];
   return marked;
+}
+
+std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eigen::Vector3f>& points,
+                                 const std::vector<Eigen::Vector3f>& directions, double reach_m) {
+  const size_t n = points.size();
+  std::vector<Ray> rays(2 * n);
+  for (size_t i = 0; i < n; ++i)
+    for (int s = 0; s < 2; ++s) {
+      Ray& r = rays[2 * i + s];
+      r.origin = points[i];
+      r.direction = s == 0 ? directions[i] : Eigen::Vector3f(-directions[i]);
+      r.t_near = 0.f;
+      r.t_far = float(reach_m);
+    }
+  std::vector<RayHit> hits(2 * n);
+  surface.Intersect(rays.data(), hits.data(), rays.size());
+  std::vector<float> distance(n, std::numeric_limits<float>::quiet_NaN());
+  for (size_t i = 0; i < n; ++i) {
+    const RayHit &up = hits[2 * i], &down = hits[2 * i + 1];
+    if (up.hit() && (!down.hit() || up.t <= down.t)) distance[i] = up.t;
+    else if (down.hit()) distance[i] = -down.t;
+  }
+  return distance;
+}
+
+TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surface,
+                                 double tolerance_m, double reach_m, bool vertical,
+                                 size_t* subdivided) {
+  const size_t nf = mesh.num_faces();
+  const std::vector<Eigen::Vector3f> normals = FaceNormals(mesh);
+  std::vector<Eigen::Vector3f> points, directions;
+  points.reserve(4 * nf);
+  directions.reserve(4 * nf);
+  for (size_t f = 0; f < nf; ++f) {
+    const Eigen::Vector3f a = mesh.vertices[mesh.faces[f][0]], b = mesh.vertices[mesh.faces[f][1]],
+                          c = mesh.vertices[mesh.faces[f][2]];
+    for (const Eigen::Vector3f& p : {Eigen::Vector3f((a + b) / 2), Eigen::Vector3f((b + c) / 2),
+                                     Eigen::Vector3f((c + a) / 2), Eigen::Vector3f((a + b + c) / 3)}) {
+      points.push_back(p);
+      directions.push_back(vertical ? Eigen::Vector3f::UnitZ() : normals[f]);
+    }
+  }
+  const std::vector<float> distance = DistanceAlong(surface, points, directions, reach_m);
+  std::vector<char> marked(nf, 0);
+  size_t count = 0;
+  for (size_t f = 0; f < nf; ++f) {
+    for (int k = 0; k < 4; ++k) {
+      const float d = distance[4 * f + k];
+      if (std::isfinite(d) && std::abs(d) > tolerance_m) marked[f] = 1;
+    }
+    count += marked[f];
+  }
+  if (subdivided) *subdivided = count;
+  if (count == 0) return mesh;
+  const size_t first_new = mesh.num_vertices();
+  TriangleMesh out = SubdivideMarked(mesh, marked);
+  std::vector<Eigen::Vector3f> vertex_normals = VertexNormals(out);
+  if (vertical) std::fill(vertex_normals.begin(), vertex_normals.end(), Eigen::Vector3f::UnitZ());
+  const std::vector<Eigen::Vector3f> fresh(out.vertices.begin() + long(first_new), out.vertices.end());
+  const std::vector<Eigen::Vector3f> fresh_normals(vertex_normals.begin() + long(first_new),
+                                                   vertex_normals.end());
+  const std::vector<float> snap = DistanceAlong(surface, fresh, fresh_normals, reach_m);
+  for (size_t i = 0; i < fresh.size(); ++i)
+    if (std::isfinite(snap[i])) out.vertices[first_new + i] += snap[i] * fresh_normals[i];
+  return out;
 }
 
 }  // namespace satmesh

@@ -10,6 +10,7 @@
 #include "core/common/stage_time.h"
 #include "core/mesh/topology.h"
 #include "core/refine/bias_estimation.h"
+#include "core/raycast/ray_scene.h"
 #include "core/refine/coarse_mesh.h"
 #include "core/refine/height_confidence.h"
 #include "core/refine/mesh_resolution.h"
@@ -36,6 +37,10 @@ constexpr double kKeepMargin = 0.001;
 // 0; large with levels 3: 0.013, 0.008, 0.009; docs/benchmarks-history.md, session 8),
 // while a DSM as sharp as the images ties with it (Pléiades: < 0.001).
 constexpr double kSkipCheckMargin = 0.01;
+
+// FollowInitialDetail looks for the initial surface within this many GSDs of the coarse
+// mesh: farther, the coarse mesh is not an approximation of it there (a hole, a cut).
+constexpr double kInitialDetailReachGsd = 4;
 
 
 void CheckInput(const RefineInput& input) {
@@ -70,6 +75,27 @@ TriangleMesh InitialSurfaceAt(const RefineInput& input, const RefineOptions& opt
                               double gsd_m, int level) {
   if (!input.initial_for_edge) return input.initial_mesh;
   return input.initial_for_edge(LevelEdge(options, gsd_m, level));
+}
+
+// The mesh the coarsest level starts from: the initial surface remeshed to the level's
+// triangle edge; at a full-resolution start (no coarser level), subdivided where that
+// mesh cannot hold the initial surface's detail (FollowInitialDetail).
+TriangleMesh CoarsestMesh(const RefineInput& input, const RefineOptions& options, double gsd_m,
+                          const Progress& progress) {
+  TriangleMesh mesh = RemeshForLevel(input.initial_mesh, options, gsd_m, options.levels, progress);
+  if (options.levels != 0 || !options.remesh_coarse || !(options.initial_detail_gsd > 0))
+    return mesh;
+  const RayScene initial(input.initial_mesh);
+  const double tolerance_m = options.initial_detail_gsd * gsd_m;
+  size_t subdivided = 0;
+  const size_t faces_before = mesh.num_faces();
+  mesh = FollowInitialDetail(mesh, initial, tolerance_m, kInitialDetailReachGsd * gsd_m,
+                             /*vertical=*/!input.initial_is_mesh, &subdivided);
+  SortSpatially(&mesh);
+  spdlog::info("level 0: {} of {} faces of the coarse mesh subdivided where the initial surface "
+               "departs from them by more than {:.2f} m ({} faces)",
+               subdivided, faces_before, tolerance_m, mesh.num_faces());
+  return mesh;
 }
 
 // Step 2: the pairs, or an error that says why there is none.
@@ -116,8 +142,7 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   const Progress& progress, const std::vector<PreparedView>& views,
                   RefineResult* result) {
-  TriangleMesh mesh =
-      RemeshForLevel(input.initial_mesh, options, result->gsd_m, options.levels, progress);
+  TriangleMesh mesh = CoarsestMesh(input, options, result->gsd_m, progress);
   const LevelContext ctx{input,
                          options,
                          progress,

@@ -67,5 +67,57 @@ TEST(FacesToSubdivide, TheBlocksEdgesAndTheBorderNotTheFlats) {
   EXPECT_EQ(size_t(std::count(all.begin(), all.end(), 1)), block.num_faces());
 }
 
+// A coarse 2 m grid over the fine surface of BlockOnPlane with a narrow 1 m high ridge
+// along x = 8 that the coarse grid's vertices miss (they sit at even x).
+TriangleMesh FineSurfaceWithRidge() {
+  TriangleMesh fine = testing::CreateGridMesh(80, 0.5f);
+  for (auto& v : fine.vertices)
+    if (std::abs(v.x() - 9.f) < 0.3f) v.z() = 1.f;
+  return fine;
+}
+
+TEST(DistanceAlong, SignedDistanceToTheNearerSideWithinReach) {
+  const TriangleMesh fine = FineSurfaceWithRidge();
+  const RayScene scene(fine);
+  const std::vector<Eigen::Vector3f> points = {{4.1f, 4.2f, 0.3f}, {4.1f, 4.2f, -0.5f},
+                                               {9.f, 20.1f, 0.2f}, {4.1f, 4.2f, 5.f}};
+  const std::vector<Eigen::Vector3f> up(points.size(), Eigen::Vector3f::UnitZ());
+  const std::vector<float> d = DistanceAlong(scene, points, up, 2.0);
+  EXPECT_NEAR(d[0], -0.3f, 1e-5f);  // the plane below
+  EXPECT_NEAR(d[1], 0.5f, 1e-5f);   // the plane above
+  EXPECT_NEAR(d[2], 0.8f, 1e-5f);   // the ridge's top above
+  EXPECT_TRUE(std::isnan(d[3]));    // 5 m off: beyond reach
+}
+
+TEST(FollowInitialDetail, SubdividesWhereTheCoarseMeshMissesTheSurfaceAndPutsTheNewVerticesOnIt) {
+  const TriangleMesh fine = FineSurfaceWithRidge();
+  const RayScene scene(fine);
+  TriangleMesh coarse = testing::CreateGridMesh(20, 2.f);  // flat, vertices at even x: misses the ridge
+  size_t subdivided = 0;
+  const TriangleMesh out = FollowInitialDetail(coarse, scene, 0.25, 2.0, /*vertical=*/true, &subdivided);
+  // Only the faces over the ridge (the column of cells 8 <= x <= 10) depart by > 0.25 m.
+  EXPECT_EQ(subdivided, size_t(2 * 20));
+  // Each marked face becomes 4; its unmarked neighbours across a split edge are bisected.
+  EXPECT_GE(out.num_faces(), coarse.num_faces() + 3 * subdivided);
+  EXPECT_LE(out.num_faces(), coarse.num_faces() + 3 * subdivided + 2 * 21);
+  // Original vertices keep their place; the new ones on x = 9 sit on the ridge (z = 1),
+  // the others on the plane.
+  for (size_t v = 0; v < coarse.num_vertices(); ++v) EXPECT_EQ(out.vertices[v], coarse.vertices[v]);
+  int on_ridge = 0;
+  for (size_t v = coarse.num_vertices(); v < out.num_vertices(); ++v) {
+    const Eigen::Vector3f& p = out.vertices[v];
+    const float expected = std::abs(p.x() - 9.f) < 0.3f ? 1.f : 0.f;
+    EXPECT_NEAR(p.z(), expected, 1e-5f) << p.transpose();
+    on_ridge += expected == 1.f;
+  }
+  // On x = 9: the midpoints of the 21 edges from x = 8 to x = 10 and of the 20 diagonals.
+  EXPECT_EQ(on_ridge, 41);
+  // A surface the coarse mesh already holds: nothing to do.
+  const RayScene flat_scene(testing::CreateGridMesh(80, 0.5f));
+  const TriangleMesh same = FollowInitialDetail(coarse, flat_scene, 0.25, 2.0, true, &subdivided);
+  EXPECT_EQ(subdivided, 0u);
+  EXPECT_EQ(same.num_faces(), coarse.num_faces());
+}
+
 }  // namespace
 }  // namespace satmesh
