@@ -78,23 +78,40 @@ TriangleMesh InitialSurfaceAt(const RefineInput& input, const RefineOptions& opt
 }
 
 // The mesh the coarsest level starts from: the initial surface remeshed to the level's
-// triangle edge; at a full-resolution start (no coarser level), subdivided where that
-// mesh cannot hold the initial surface's detail (FollowInitialDetail).
-TriangleMesh CoarsestMesh(const RefineInput& input, const RefineOptions& options, double gsd_m,
+// triangle edge. At a full-resolution start (no coarser level) whose images do not
+// resolve the surface to initial_detail_gsd (the median vertex's height sigma from the
+// pairs, LevelHeightSigma, above it: a stereo or tri-stereo pass), that mesh is subdivided
+// where it cannot hold the initial surface's detail (FollowInitialDetail): the iterations
+// at one level do not win back what the 2-pixel mesh smooths away (synthetic 0.7 m stereo
+// and tri-stereo, F-score @0.5 m 2-3 points higher; multi-date views resolve it and lose
+// 1 point of facades with it; docs/benchmarks-history.md, session 18).
+TriangleMesh CoarsestMesh(const RefineInput& input, const RefineOptions& options,
+                          const std::vector<PreparedView>& views,
+                          const std::vector<std::pair<int, int>>& pairs, double gsd_m,
                           const Progress& progress) {
   TriangleMesh mesh = RemeshForLevel(input.initial_mesh, options, gsd_m, options.levels, progress);
   if (options.levels != 0 || !options.remesh_coarse || !(options.initial_detail_gsd > 0))
     return mesh;
   const RayScene initial(input.initial_mesh);
   const double tolerance_m = options.initial_detail_gsd * gsd_m;
+  std::vector<float> sigma = LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh);
+  const auto middle = sigma.begin() + long(sigma.size() / 2);
+  std::nth_element(sigma.begin(), middle, sigma.end());  // +inf (unseen) sorts last
+  if (sigma.empty() || !(*middle > tolerance_m)) {
+    spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex), within "
+                 "{:.2f} m: the coarse mesh is kept at {} pixels",
+                 sigma.empty() ? 0.0 : double(*middle), tolerance_m, options.coarse_edge_px);
+    return mesh;
+  }
   size_t subdivided = 0;
   const size_t faces_before = mesh.num_faces();
   mesh = FollowInitialDetail(mesh, initial, tolerance_m, kInitialDetailReachGsd * gsd_m,
                              /*vertical=*/!input.initial_is_mesh, &subdivided);
   SortSpatially(&mesh);
-  spdlog::info("level 0: {} of {} faces of the coarse mesh subdivided where the initial surface "
-               "departs from them by more than {:.2f} m ({} faces)",
-               subdivided, faces_before, tolerance_m, mesh.num_faces());
+  spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex): {} of {} "
+               "faces of the coarse mesh subdivided where the initial surface departs from them "
+               "by more than {:.2f} m ({} faces)",
+               double(*middle), subdivided, faces_before, tolerance_m, mesh.num_faces());
   return mesh;
 }
 
@@ -142,7 +159,8 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   const Progress& progress, const std::vector<PreparedView>& views,
                   RefineResult* result) {
-  TriangleMesh mesh = CoarsestMesh(input, options, result->gsd_m, progress);
+  TriangleMesh mesh =
+      CoarsestMesh(input, options, views, result->pairs, result->gsd_m, progress);
   const LevelContext ctx{input,
                          options,
                          progress,

@@ -131,6 +131,26 @@ double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sour
                          &scratch, nullptr, nullptr);
 }
 
+std::vector<float> LevelHeightSigma(const RefineInput& input,
+                                    const std::vector<PreparedView>& sources,
+                                    const std::vector<std::pair<int, int>>& pairs,
+                                    const RefineOptions& options, double level_gsd_m, int level,
+                                    const TriangleMesh& mesh) {
+  std::vector<int> slot;
+  std::vector<ViewLevel> views =
+      MakeViewLevels(input, sources, pairs, mesh, level, options.virtual_camera_grid_px, &slot);
+  const auto normals = FaceNormals(mesh);
+  HitMapScratch raster;
+  RasterizeHitMaps(mesh, &views, &raster, &normals);
+  const double noise_variance = MeanNoiseVariance(sources, level);
+  std::vector<PassScratch> scratch;
+  std::vector<double> information(mesh.num_vertices(), 0.0);
+  PhotometricPass(views, slot, pairs, mesh, normals,
+                  PhotometricOptionsAt(options, level_gsd_m, noise_variance), &scratch, nullptr,
+                  nullptr, /*one_direction=*/-1, &information);
+  return HeightSigmaFromInformation(information, noise_variance);
+}
+
 bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, TriangleMesh* mesh,
                  LevelStats* stats_out) {
   const auto level_start = StageClock::now();

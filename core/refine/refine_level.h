@@ -33,4 +33,13 @@ double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sour
                  const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
                  double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize);
 
+// The images' height sigma of each vertex of `mesh` at `level` (metres; +inf where no
+// pair sees it): one photometric pass over both directions of every pair, gathering the
+// Fisher information (HeightSigmaFromInformation), without changing anything.
+std::vector<float> LevelHeightSigma(const RefineInput& input,
+                                    const std::vector<PreparedView>& sources,
+                                    const std::vector<std::pair<int, int>>& pairs,
+                                    const RefineOptions& options, double level_gsd_m, int level,
+                                    const TriangleMesh& mesh);
+
 }  // namespace satmesh

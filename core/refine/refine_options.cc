@@ -69,9 +69,9 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "between levels only faces near a vertex off the plane of its neighbours by more than "
        "this many level GSDs are subdivided; planar parts keep larger triangles; 0: all faces"},
       {"initial_detail_gsd", &R::initial_detail_gsd, Range::AtLeast(0),
-       "a full-resolution start (no coarser level): faces of the coarse mesh the initial surface "
-       "departs from by more than this many GSDs are subdivided, their new vertices put on it; "
-       "0: off"},
+       "a full-resolution start (no coarser level) whose images resolve the median vertex's "
+       "height to worse than this many GSDs: faces of the coarse mesh the initial surface "
+       "departs from by more than that are subdivided, their new vertices put on it; 0: off"},
       {"remesh_coarse", &R::remesh_coarse, {},
        "isotropic remeshing of the coarse mesh; false: keep the input's triangles"},
       {"restart_from_initial", &R::restart_from_initial, {},

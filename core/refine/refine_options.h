@@ -64,10 +64,12 @@ struct RefineOptions {
                                    // coarser triangles (mesh_resolution.h;
                                    // docs/benchmarks-history.md, session 12); 0: all
                                    // faces (the paper)
-  double initial_detail_gsd = 0.25;  // a full-resolution start (no coarser level): faces of
-                                     // the coarse mesh the initial surface departs from by
-                                     // more than this many GSDs are subdivided, their new
-                                     // vertices put on it (FollowInitialDetail); 0: off
+  double initial_detail_gsd = 0.25;  // a full-resolution start (no coarser level) whose
+                                     // images resolve the median vertex's height to worse
+                                     // than this many GSDs: faces of the coarse mesh the
+                                     // initial surface departs from by more than that are
+                                     // subdivided, their new vertices put on it
+                                     // (refine.cc, CoarsestMesh); 0: off
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous
