@@ -66,8 +66,7 @@ std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eige
 }
 
 TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surface,
-                                 double tolerance_m, double reach_m, bool vertical,
-                                 size_t* subdivided) {
+                                 double tolerance_m, double reach_m, size_t* subdivided) {
   const size_t nf = mesh.num_faces();
   const std::vector<Eigen::Vector3f> normals = FaceNormals(mesh);
   std::vector<Eigen::Vector3f> points, directions;
@@ -79,7 +78,7 @@ TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surfa
     for (const Eigen::Vector3f& p : {Eigen::Vector3f((a + b) / 2), Eigen::Vector3f((b + c) / 2),
                                      Eigen::Vector3f((c + a) / 2), Eigen::Vector3f((a + b + c) / 3)}) {
       points.push_back(p);
-      directions.push_back(vertical ? Eigen::Vector3f::UnitZ() : normals[f]);
+      directions.push_back(normals[f]);
     }
   }
   const std::vector<float> distance = DistanceAlong(surface, points, directions, reach_m);
@@ -96,8 +95,7 @@ TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surfa
   if (count == 0) return mesh;
   const size_t first_new = mesh.num_vertices();
   TriangleMesh out = SubdivideMarked(mesh, marked);
-  std::vector<Eigen::Vector3f> vertex_normals = VertexNormals(out);
-  if (vertical) std::fill(vertex_normals.begin(), vertex_normals.end(), Eigen::Vector3f::UnitZ());
+  const std::vector<Eigen::Vector3f> vertex_normals = VertexNormals(out);
   const std::vector<Eigen::Vector3f> fresh(out.vertices.begin() + long(first_new), out.vertices.end());
   const std::vector<Eigen::Vector3f> fresh_normals(vertex_normals.begin() + long(first_new),
                                                    vertex_normals.end());

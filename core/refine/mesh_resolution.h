@@ -30,16 +30,17 @@ std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eige
 
 // The coarse mesh refined where it cannot hold the initial surface's detail: faces from
 // which `surface` (the initial surface's Embree scene) departs by more than tolerance_m
-// at the face's edge midpoints or centroid (measured within reach_m, vertically for a
-// 2.5D surface such as a DSM's grid mesh, else along the face's normal) are subdivided
-// (SubdivideMarked), and the new vertices are put on the surface (vertically, else along
-// their normals). A full-resolution start at 2-pixel triangles otherwise smooths away the
+// along the face's normal, at the face's edge midpoints or centroid (measured within
+// reach_m), are subdivided (SubdivideMarked), and the new vertices are put on the surface
+// along their normals. Along the normals, not vertically: a DSM's blurred wall measured
+// vertically departs everywhere, and pinning it to the DSM cost the 0.5 m scenes under
+// overhangs (docs/benchmarks-history.md, session 18). A full-resolution start at 2-pixel triangles otherwise smooths away the
 // initial surface's detail, which the iterations at one level do not win back (synthetic
 // 0.7 m stereo: F-score @0.5 m 48.7 initial -> 45.4 refined without, 47.7 with;
 // docs/benchmarks-history.md, session 18). *subdivided (when not null): the number of
 // faces marked.
 TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surface,
-                                 double tolerance_m, double reach_m, bool vertical,
+                                 double tolerance_m, double reach_m,
                                  size_t* subdivided = nullptr);
 
 }  // namespace satmesh

@@ -106,7 +106,7 @@ TriangleMesh CoarsestMesh(const RefineInput& input, const RefineOptions& options
   size_t subdivided = 0;
   const size_t faces_before = mesh.num_faces();
   mesh = FollowInitialDetail(mesh, initial, tolerance_m, kInitialDetailReachGsd * gsd_m,
-                             /*vertical=*/!input.initial_is_mesh, &subdivided);
+                             &subdivided);
   SortSpatially(&mesh);
   spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex): {} of {} "
                "faces of the coarse mesh subdivided where the initial surface departs from them "

@@ -94,7 +94,7 @@ TEST(FollowInitialDetail, SubdividesWhereTheCoarseMeshMissesTheSurfaceAndPutsThe
   const RayScene scene(fine);
   TriangleMesh coarse = testing::CreateGridMesh(20, 2.f);  // flat, vertices at even x: misses the ridge
   size_t subdivided = 0;
-  const TriangleMesh out = FollowInitialDetail(coarse, scene, 0.25, 2.0, /*vertical=*/true, &subdivided);
+  const TriangleMesh out = FollowInitialDetail(coarse, scene, 0.25, 2.0, &subdivided);
   // Only the faces over the ridge (the column of cells 8 <= x <= 10) depart by > 0.25 m.
   EXPECT_EQ(subdivided, size_t(2 * 20));
   // Each marked face becomes 4; its unmarked neighbours across a split edge are bisected.
@@ -114,7 +114,7 @@ TEST(FollowInitialDetail, SubdividesWhereTheCoarseMeshMissesTheSurfaceAndPutsThe
   EXPECT_EQ(on_ridge, 41);
   // A surface the coarse mesh already holds: nothing to do.
   const RayScene flat_scene(testing::CreateGridMesh(80, 0.5f));
-  const TriangleMesh same = FollowInitialDetail(coarse, flat_scene, 0.25, 2.0, true, &subdivided);
+  const TriangleMesh same = FollowInitialDetail(coarse, flat_scene, 0.25, 2.0, &subdivided);
   EXPECT_EQ(subdivided, 0u);
   EXPECT_EQ(same.num_faces(), coarse.num_faces());
 }
