@@ -28,16 +28,14 @@ std::vector<char> FacesToSubdivide(const TriangleMesh& mesh, double tolerance_m)
 std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eigen::Vector3f>& points,
                                  const std::vector<Eigen::Vector3f>& directions, double reach_m);
 
-// The coarse mesh refined where it cannot hold the initial surface's detail: faces from
-// which `surface` (the initial surface's Embree scene) departs by more than tolerance_m
-// along the face's normal, at the face's edge midpoints or centroid (measured within
-// reach_m), are subdivided (SubdivideMarked), and the new vertices are put on the surface
-// along their normals. Along the normals, not vertically: a DSM's blurred wall measured
-// vertically departs everywhere, and pinning it to the DSM cost the 0.5 m scenes under
-// overhangs (docs/benchmarks-history.md, session 18). A full-resolution start at 2-pixel triangles otherwise smooths away the
-// initial surface's detail, which the iterations at one level do not win back (synthetic
-// 0.7 m stereo: F-score @0.5 m 48.7 initial -> 45.4 refined without, 47.7 with;
-// docs/benchmarks-history.md, session 18). *subdivided (when not null): the number of
+// The coarse mesh refined where it cannot hold the initial surface's detail (used by
+// refine.cc's CoarsestMesh, which says when): faces from which `surface` (the initial
+// surface's Embree scene) departs by more than tolerance_m along the face's normal, at the
+// face's edge midpoints or centroid (measured within reach_m), are subdivided
+// (SubdivideMarked), and the new vertices are put on the surface along their normals.
+// Along the normals, not vertically: a DSM's blurred wall measured vertically departs
+// everywhere, and pinning it to the DSM cost the 0.5 m scenes under overhangs
+// (docs/benchmarks-history.md, session 18). *subdivided (when not null): the number of
 // faces marked.
 TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surface,
                                  double tolerance_m, double reach_m,

@@ -9,8 +9,8 @@
 #include "core/common/error.h"
 #include "core/common/stage_time.h"
 #include "core/mesh/topology.h"
-#include "core/refine/bias_estimation.h"
 #include "core/raycast/ray_scene.h"
+#include "core/refine/bias_estimation.h"
 #include "core/refine/coarse_mesh.h"
 #include "core/refine/height_confidence.h"
 #include "core/refine/mesh_resolution.h"
@@ -92,7 +92,6 @@ TriangleMesh CoarsestMesh(const RefineInput& input, const RefineOptions& options
   TriangleMesh mesh = RemeshForLevel(input.initial_mesh, options, gsd_m, options.levels, progress);
   if (options.levels != 0 || !options.remesh_coarse || !(options.initial_detail_gsd > 0))
     return mesh;
-  const RayScene initial(input.initial_mesh);
   const double tolerance_m = options.initial_detail_gsd * gsd_m;
   std::vector<float> sigma = LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh);
   const auto middle = sigma.begin() + long(sigma.size() / 2);
@@ -103,6 +102,7 @@ TriangleMesh CoarsestMesh(const RefineInput& input, const RefineOptions& options
                  sigma.empty() ? 0.0 : double(*middle), tolerance_m, options.coarse_edge_px);
     return mesh;
   }
+  const RayScene initial(input.initial_mesh);  // after the test: a DSM mesh of millions of faces
   size_t subdivided = 0;
   const size_t faces_before = mesh.num_faces();
   mesh = FollowInitialDetail(mesh, initial, tolerance_m, kInitialDetailReachGsd * gsd_m,

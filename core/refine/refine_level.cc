@@ -109,11 +109,12 @@ std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
   return views;
 }
 
-}  // namespace
-
-double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sources,
-                 const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
-                 double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize) {
+// One photometric pass over both directions of every pair through the fixed `mesh`:
+// the mean ZNCC, and each vertex's Fisher information when `information` is not null.
+double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& sources,
+                   const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
+                   double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize,
+                   std::vector<double>* information = nullptr) {
   std::vector<int> slot;
   std::vector<ViewLevel> views =
       MakeViewLevels(input, sources, pairs, mesh, level, options.virtual_camera_grid_px, &slot);
@@ -126,9 +127,18 @@ double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sour
     for (auto& v : views) CastHitMap(scene, &v, &normals);
   }
   std::vector<PassScratch> scratch;
+  if (information) information->assign(mesh.num_vertices(), 0.0);
   return PhotometricPass(views, slot, pairs, mesh, normals,
                          PhotometricOptionsAt(options, level_gsd_m, MeanNoiseVariance(sources, level)),
-                         &scratch, nullptr, nullptr);
+                         &scratch, nullptr, nullptr, /*one_direction=*/-1, information);
+}
+
+}  // namespace
+
+double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sources,
+                 const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
+                 double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize) {
+  return MeasurePass(input, sources, pairs, options, level_gsd_m, level, mesh, rasterize);
 }
 
 std::vector<float> LevelHeightSigma(const RefineInput& input,
@@ -136,19 +146,10 @@ std::vector<float> LevelHeightSigma(const RefineInput& input,
                                     const std::vector<std::pair<int, int>>& pairs,
                                     const RefineOptions& options, double level_gsd_m, int level,
                                     const TriangleMesh& mesh) {
-  std::vector<int> slot;
-  std::vector<ViewLevel> views =
-      MakeViewLevels(input, sources, pairs, mesh, level, options.virtual_camera_grid_px, &slot);
-  const auto normals = FaceNormals(mesh);
-  HitMapScratch raster;
-  RasterizeHitMaps(mesh, &views, &raster, &normals);
-  const double noise_variance = MeanNoiseVariance(sources, level);
-  std::vector<PassScratch> scratch;
-  std::vector<double> information(mesh.num_vertices(), 0.0);
-  PhotometricPass(views, slot, pairs, mesh, normals,
-                  PhotometricOptionsAt(options, level_gsd_m, noise_variance), &scratch, nullptr,
-                  nullptr, /*one_direction=*/-1, &information);
-  return HeightSigmaFromInformation(information, noise_variance);
+  std::vector<double> information;
+  MeasurePass(input, sources, pairs, options, level_gsd_m, level, mesh, /*rasterize=*/true,
+              &information);
+  return HeightSigmaFromInformation(information, MeanNoiseVariance(sources, level));
 }
 
 bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, TriangleMesh* mesh,

@@ -67,8 +67,8 @@ TEST(FacesToSubdivide, TheBlocksEdgesAndTheBorderNotTheFlats) {
   EXPECT_EQ(size_t(std::count(all.begin(), all.end(), 1)), block.num_faces());
 }
 
-// A coarse 2 m grid over the fine surface of BlockOnPlane with a narrow 1 m high ridge
-// along x = 8 that the coarse grid's vertices miss (they sit at even x).
+// A fine (0.5 m) plane with a narrow 1 m high ridge along x = 9, which a coarse 2 m grid
+// misses (its vertices sit at even x).
 TriangleMesh FineSurfaceWithRidge() {
   TriangleMesh fine = testing::CreateGridMesh(80, 0.5f);
   for (auto& v : fine.vertices)
