@@ -37,6 +37,7 @@ json LevelsToJson(const std::vector<LevelStats>& levels) {
                    {"restarted_from_initial", l.restarted},
                    {"time_s", {{"hit_maps", l.times.hit_maps_s},
                                {"intersect", l.times.intersect_s},
+                               {"sunlight", l.times.sunlight_s},
                                {"gradient", l.times.gradient_s},
                                {"smoothness", l.times.smoothness_s},
                                {"update", l.times.update_s},
@@ -73,6 +74,7 @@ std::vector<LevelStats> LevelsFromJson(const json& levels) {
       const json& t = l["time_s"];
       s.times.hit_maps_s = t.value("hit_maps", 0.0);
       s.times.intersect_s = t.value("intersect", 0.0);
+      s.times.sunlight_s = t.value("sunlight", 0.0);
       s.times.gradient_s = t.value("gradient", 0.0);
       s.times.smoothness_s = t.value("smoothness", 0.0);
       s.times.update_s = t.value("update", 0.0);
@@ -135,6 +137,7 @@ JobRefineSummary SummariseTiles(const std::vector<TileResult>& tiles) {
       sum.level_s += l.level_s;
       sum.times.hit_maps_s += l.times.hit_maps_s;
       sum.times.intersect_s += l.times.intersect_s;
+      sum.times.sunlight_s += l.times.sunlight_s;
       sum.times.gradient_s += l.times.gradient_s;
       sum.times.smoothness_s += l.times.smoothness_s;
       sum.times.update_s += l.times.update_s;

@@ -28,6 +28,15 @@ void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
                             ws->valid.data()};
 #pragma omp parallel for schedule(dynamic, 8)
   for (int row = 0; row < h; ++row) WarpRow(context, row, options.vectorized);
+  // Moving shadows: the point's light differs under the two views' suns.
+  const uint64_t marked = vi.hit_map.suns_marked;
+  if (options.sunlit_only && vi.hit_map.sunlit.size() == n && vi.view < 64 && vj.view < 64 &&
+      ((marked >> vi.view) & 1) && ((marked >> vj.view) & 1)) {
+    const uint64_t* lit = vi.hit_map.sunlit.data();
+    const int bi = vi.view, bj = vj.view;
+    for (size_t p = 0; p < n; ++p)
+      if (((lit[p] >> bi) ^ (lit[p] >> bj)) & 1) ws->valid[p] = 0;
+  }
 }
 
 }  // namespace

@@ -23,6 +23,10 @@ struct PhotometricOptions {
   double min_ray_cos = 0.1;             // ignore pixels whose |cos(ray, normal)| is below, [0,1)
   bool vectorized = true;               // AVX2 warp where the CPU has it (warp.h); false:
                                         // the scalar reference
+  // Where view i's hit map says which suns light its pixels (HitMap::sunlit, both views'
+  // suns marked), a pixel lit under one view's sun and shadowed under the other's is left
+  // out of the pair-direction (RefineOptions::sunlit_pairs).
+  bool sunlit_only = false;
 };
 
 struct PairEnergy {

@@ -41,6 +41,7 @@ struct StageTimes {
   double hit_maps_s = 0;   // hit maps: rasterized, followed, or cast with Embree
   double gradient_s = 0, smoothness_s = 0, update_s = 0;
   double intersect_s = 0;  // the part of hit_maps_s spent in Embree's Intersect alone
+  double sunlight_s = 0;   // the part of hit_maps_s spent marking the suns' light (sunlight.h)
 };
 
 struct LevelStats {

@@ -13,6 +13,7 @@
 #include "core/refine/height_confidence.h"
 #include "core/refine/hit_map_raster.h"
 #include "core/refine/photometric_gradient.h"
+#include "core/refine/sunlight.h"
 #include "core/refine/thin_plate.h"
 #include "core/refine/view_level.h"
 
@@ -166,13 +167,28 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   std::vector<ViewLevel> views = MakeViewLevels(ctx.input, ctx.sources, ctx.pairs, *mesh, level,
                                                 opt.virtual_camera_grid_px, &slot);
   const double noise_variance = MeanNoiseVariance(ctx.sources, level);
-  const PhotometricOptions photo = PhotometricOptionsAt(opt, gsd, noise_variance);
+  PhotometricOptions photo = PhotometricOptionsAt(opt, gsd, noise_variance);
+  // Moving shadows (sunlit_pairs): which suns light each pixel's point, by the level's
+  // surface at its first iteration and again at its last (the light changes little while
+  // the surface moves by a fraction of a metre; marking costs ~3 s a time at 0.5 m).
+  std::vector<Eigen::Vector3f> suns;
+  if (opt.MatchesSunlitOnly(ctx.input.initial_is_mesh)) {
+    for (const RefineView& v : ctx.input.views) suns.push_back(SunDirection(v.acquisition));
+    if (std::all_of(suns.begin(), suns.end(), [](const auto& d) { return d.squaredNorm() == 0; }))
+      suns.clear();  // no image says where its sun was
+  }
+  photo.sunlit_only = !suns.empty();
 
   std::optional<RayScene> scene;  // Embree, unless the hit maps are rasterized
   if (!opt.rasterize_hit_maps) scene.emplace(*mesh);
   HitMapScratch raster;
   std::vector<PassScratch> scratch;
   const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
+  // smooth_offsets: the thin-plate term of the offset from the level's start, U²(V - V0) =
+  // U²(V) - U²(V0) (the umbrella operator is linear), so the start's creases are kept.
+  const std::vector<Eigen::Vector3f> start_u2 = opt.SmoothsOffsets(ctx.input.initial_is_mesh)
+                                                    ? UmbrellaSquared(mesh->vertices, adjacency)
+                                                    : std::vector<Eigen::Vector3f>{};
   const size_t nv = mesh->vertices.size();
   stats.num_vertices = int(nv);
   stats.num_faces = int(mesh->faces.size());
@@ -211,6 +227,11 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
         stats.times.intersect_s += CastHitMap(*scene, &v, &normals);
       }
     }
+    if (!suns.empty() && (it == 0 || last)) {
+      const auto ts = StageClock::now();
+      MarkSunlight(*mesh, normals, suns, &views);
+      stats.times.sunlight_s += SecondsSince(ts);
+    }
     stats.times.hit_maps_s += SecondsSince(t0);
 
     t0 = StageClock::now();
@@ -240,7 +261,9 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     }
 
     t0 = StageClock::now();
-    const auto u2 = UmbrellaSquared(mesh->vertices, adjacency);
+    std::vector<Eigen::Vector3f> u2 = UmbrellaSquared(mesh->vertices, adjacency);
+    if (!start_u2.empty())
+      for (size_t v = 0; v < nv; ++v) u2[v] -= start_u2[v];
     stats.times.smoothness_s += SecondsSince(t0);
 
     // Gradient step: photometric part in units of GSD², thin-plate homogenised by 1/GSD².

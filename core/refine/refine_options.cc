@@ -105,6 +105,15 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "where its pairs agree best on the initial surface (else the datum of minimum "
        "corrections), the last step takes off the rigid translation left; 1: on, 0: off, -1: on "
        "for a mesh start (a model the user trusts), off for a DSM start"},
+      {"smooth_offsets", &R::smooth_offsets, Range::In(-1, 1),
+       "the thin-plate term smooths each vertex's offset from where the level started it, not "
+       "the surface, so the start's creases (walls, eaves, balconies) are kept; 1: on, 0: off, "
+       "-1: on for a mesh start (a model the user trusts), off for a DSM start (its noise)"},
+      {"sunlit_pairs", &R::sunlit_pairs, Range::In(-1, 1),
+       "a pixel whose surface point is lit under one image's sun and in shadow under the "
+       "other's (by the current surface and the suns in the images' metadata) is left out of "
+       "that pair: moving shadows of a multi-date set are not matched; 1: on, 0: off, -1: on "
+       "for a mesh start (a DSM's blurred walls cast wrong shadows)"},
       {"hold_unseen", &R::hold_unseen, {},
        "vertices no pair-direction sees (occluded, grazing) do not move"},
       {"hold_boundary_xy", &R::hold_boundary_xy, {},

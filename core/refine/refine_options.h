@@ -112,6 +112,15 @@ struct RefineOptions {
                                    // minimum corrections), and the last step takes off the
                                    // rigid translation left (RegisterToInitial); 1: on,
                                    // 0: off, -1: on for a mesh start
+  int smooth_offsets = -1;         // the thin-plate term acts on each vertex's offset from where
+                                   // the level started it instead of on the surface itself, so
+                                   // the start's creases (walls, eaves, balconies) are not
+                                   // rounded off; 1: on, 0: off, -1: on for a mesh start
+  int sunlit_pairs = -1;           // a pixel lit under one image's sun and in shadow under the
+                                   // other's is left out of that pair-direction (moving
+                                   // shadows of a multi-date set; the suns from the images'
+                                   // metadata; sunlight.h); 1: on, 0: off, -1: on for a mesh
+                                   // start (a DSM's blurred walls cast wrong shadows)
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing
@@ -125,6 +134,14 @@ struct RefineOptions {
   // register_to_initial resolved for a mesh start or a DSM start.
   bool RegistersToInitial(bool initial_is_mesh) const {
     return register_to_initial < 0 ? initial_is_mesh : register_to_initial > 0;
+  }
+  // smooth_offsets resolved for a mesh start or a DSM start.
+  bool SmoothsOffsets(bool initial_is_mesh) const {
+    return smooth_offsets < 0 ? initial_is_mesh : smooth_offsets > 0;
+  }
+  // sunlit_pairs resolved for a mesh start or a DSM start.
+  bool MatchesSunlitOnly(bool initial_is_mesh) const {
+    return sunlit_pairs < 0 ? initial_is_mesh : sunlit_pairs > 0;
   }
 };
 

@@ -1,6 +1,7 @@
 #pragma once
 // One view at one pyramid level: normalised image, level RPC, virtual camera, the ray
 // directions of all its pixels (fixed for the level), and the hit map of the current mesh.
+#include <cstdint>
 #include <vector>
 
 #include "core/image/image.h"
@@ -25,6 +26,9 @@ struct HitMap {
   std::vector<float> ray_cos;           // ray · face normal per hit pixel (RayCosine; filled
                                         // by CastHitMap / RasterizeHitMap given the normals);
                                         // shared by all pair-directions from this view
+  std::vector<uint64_t> sunlit;         // per pixel, when marked (sunlight.h, MarkSunlight):
+                                        // bit s set where sun s lights the hit point
+  uint64_t suns_marked = 0;             // the suns s that sunlit says something about
 };
 
 struct ViewLevel {

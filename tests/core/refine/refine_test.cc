@@ -91,6 +91,40 @@ TEST(Refine, GroundTruthStaysPut) {
   EXPECT_EQ(result.levels.size(), 3u);
 }
 
+// smooth_offsets: the thin-plate term acts on the offset from the start, so a mesh start's
+// crease the images say nothing about (alpha 0: the thin-plate term alone) stays as it is;
+// smoothing the surface itself rounds it off.
+TEST(Refine, SmoothingTheOffsetsKeepsAMeshStartsCreases) {
+  const testing::Plane plane;
+  TriangleMesh ridge = testing::PlaneMesh(plane, 40, 1.0, 0.0);
+  size_t top = 0;
+  for (size_t v = 0; v < ridge.vertices.size(); ++v)
+    if (std::abs(ridge.vertices[v].x()) < 0.5f) {
+      ridge.vertices[v].z() += 1.f;  // a 1 m ridge along y
+      if (std::abs(ridge.vertices[v].y()) < 0.5f) top = v;
+    }
+  RefineInput input = testing::MakePlaneInput(plane, testing::DefaultViews(), ridge);
+  input.initial_is_mesh = true;
+  RefineOptions o = SmallOptions();
+  o.levels = 0;
+  o.alpha = 0;
+  o.remesh_coarse = false;
+  o.initial_sigma_gsd = 0;
+  o.keep_initial_sigmas = 0;
+  o.register_to_initial = 0;
+  o.hold_unseen = false;
+  ASSERT_EQ(o.smooth_offsets, -1);  // on for a mesh start
+  const RefineResult kept = Refine(input, o);
+  o.smooth_offsets = 0;
+  const RefineResult smoothed = Refine(input, o);
+  ASSERT_EQ(kept.mesh.vertices.size(), ridge.vertices.size());
+  double largest_move = 0;
+  for (size_t v = 0; v < ridge.vertices.size(); ++v)
+    largest_move = std::max(largest_move, double((kept.mesh.vertices[v] - ridge.vertices[v]).norm()));
+  EXPECT_LT(largest_move, 1e-4);
+  EXPECT_LT(smoothed.mesh.vertices[top].z(), ridge.vertices[top].z() - 0.05f);
+}
+
 TEST(Refine, TiltedPlaneStartedMetresOffConverges) {
   const testing::Plane plane;
   const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
