@@ -184,11 +184,16 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   HitMapScratch raster;
   std::vector<PassScratch> scratch;
   const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
-  // smooth_offsets: the thin-plate term of the offset from the level's start, U²(V - V0) =
-  // U²(V) - U²(V0) (the umbrella operator is linear), so the start's creases are kept.
-  const std::vector<Eigen::Vector3f> start_u2 = opt.SmoothsOffsets(ctx.input.initial_is_mesh)
-                                                    ? UmbrellaSquared(mesh->vertices, adjacency)
-                                                    : std::vector<Eigen::Vector3f>{};
+  // smooth_offsets: at full resolution, the thin-plate term of the offset from the level's
+  // start, U²(V - V0) = U²(V) - U²(V0) (the umbrella operator is linear), so the start's
+  // creases are kept. A coarser level's start is a coarse remesh of the model, whose
+  // creases are already zigzag approximations that depend on the remesher's every choice:
+  // there the surface itself is smoothed (else the subdivision between levels follows the
+  // zigzags: 6% more or fewer faces from the same mesh in another CRS).
+  const std::vector<Eigen::Vector3f> start_u2 =
+      level == 0 && opt.SmoothsOffsets(ctx.input.initial_is_mesh)
+          ? UmbrellaSquared(mesh->vertices, adjacency)
+          : std::vector<Eigen::Vector3f>{};
   const size_t nv = mesh->vertices.size();
   stats.num_vertices = int(nv);
   stats.num_faces = int(mesh->faces.size());

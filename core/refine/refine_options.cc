@@ -106,8 +106,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "corrections), the last step takes off the rigid translation left; 1: on, 0: off, -1: on "
        "for a mesh start (a model the user trusts), off for a DSM start"},
       {"smooth_offsets", &R::smooth_offsets, Range::In(-1, 1),
-       "the thin-plate term smooths each vertex's offset from where the level started it, not "
-       "the surface, so the start's creases (walls, eaves, balconies) are kept; 1: on, 0: off, "
+       "at full resolution the thin-plate term smooths each vertex's offset from where the "
+       "level started it, not the surface, so the start's creases (walls, eaves, balconies) are kept; 1: on, 0: off, "
        "-1: on for a mesh start (a model the user trusts), off for a DSM start (its noise)"},
       {"sunlit_pairs", &R::sunlit_pairs, Range::In(-1, 1),
        "a pixel whose surface point is lit under one image's sun and in shadow under the "

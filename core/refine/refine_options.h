@@ -112,10 +112,11 @@ struct RefineOptions {
                                    // minimum corrections), and the last step takes off the
                                    // rigid translation left (RegisterToInitial); 1: on,
                                    // 0: off, -1: on for a mesh start
-  int smooth_offsets = -1;         // the thin-plate term acts on each vertex's offset from where
-                                   // the level started it instead of on the surface itself, so
-                                   // the start's creases (walls, eaves, balconies) are not
-                                   // rounded off; 1: on, 0: off, -1: on for a mesh start
+  int smooth_offsets = -1;         // at full resolution (level 0) the thin-plate term acts on
+                                   // each vertex's offset from where the level started it
+                                   // instead of on the surface itself, so the start's creases
+                                   // (walls, eaves, balconies) are not rounded off (refine_level.cc);
+                                   // 1: on, 0: off, -1: on for a mesh start
   int sunlit_pairs = -1;           // a pixel lit under one image's sun and in shadow under the
                                    // other's is left out of that pair-direction (moving
                                    // shadows of a multi-date set; the suns from the images'
