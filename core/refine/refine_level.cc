@@ -234,7 +234,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     }
     if (!suns.empty() && (it == 0 || last)) {
       const auto ts = StageClock::now();
-      MarkSunlight(*mesh, normals, suns, &views);
+      MarkSunlight(*mesh, normals, suns, ctx.pairs, &views);
       stats.times.sunlight_s += SecondsSince(ts);
     }
     stats.times.hit_maps_s += SecondsSince(t0);

@@ -17,7 +17,7 @@ Eigen::Vector3f SunDirection(const AcquisitionInfo& acquisition) {
 
 void MarkSunlight(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& face_normals,
                   const std::vector<Eigen::Vector3f>& sun_directions,
-                  std::vector<ViewLevel>* views) {
+                  const std::vector<std::pair<int, int>>& pairs, std::vector<ViewLevel>* views) {
   const RayScene scene(mesh);
   std::vector<Ray> rays;
   std::vector<RayHit> hits;
@@ -29,9 +29,14 @@ void MarkSunlight(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& 
     view.hit_map.suns_marked = 0;
     rays.resize(n);
     hits.resize(n);
+    uint64_t needed = view.view < 64 ? uint64_t(1) << view.view : 0;
+    for (const auto& [i, j] : pairs) {
+      if (i == view.view && j < 64) needed |= uint64_t(1) << j;
+      if (j == view.view && i < 64) needed |= uint64_t(1) << i;
+    }
     for (size_t s = 0; s < std::min<size_t>(64, sun_directions.size()); ++s) {
       const Eigen::Vector3f& sun = sun_directions[s];
-      if (sun.squaredNorm() == 0) continue;
+      if (sun.squaredNorm() == 0 || !((needed >> s) & 1)) continue;
 #pragma omp parallel for schedule(static)
       for (long p = 0; p < long(n); ++p) {
         const SurfacePoint& x = surface[p];

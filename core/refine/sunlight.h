@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/image/acquisition_info.h"
@@ -20,10 +21,12 @@ Eigen::Vector3f SunDirection(const AcquisitionInfo& acquisition);
 
 // For every view in `views` and each of its hit pixels: bit s of hit_map.sunlit set when
 // the hit point is lit by sun_directions[s] (a ray from just off the surface towards it
-// hits nothing of `mesh`), for the s < 64 with a non-zero direction; 0 where the pixel
-// hits nothing. `mesh` and the views' hit maps must be current and in the same frame.
+// hits nothing of `mesh`), for the suns s < 64 with a non-zero direction of the view
+// itself and of its partners in `pairs` (view indices; the only suns its pair-directions
+// compare); 0 where the pixel hits nothing. hit_map.suns_marked says which s were traced.
+// `mesh` and the views' hit maps must be current and in the same frame.
 void MarkSunlight(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& face_normals,
                   const std::vector<Eigen::Vector3f>& sun_directions,
-                  std::vector<ViewLevel>* views);
+                  const std::vector<std::pair<int, int>>& pairs, std::vector<ViewLevel>* views);
 
 }  // namespace satmesh

@@ -54,7 +54,9 @@ TEST(MarkSunlight, PointsInTheCanopysShadowAreDarkUnderThatSunOnly) {
   // Suns: 0 in the east, 1 in the south (shadow north of the canopy), 2 unknown.
   const std::vector<Eigen::Vector3f> suns = {SunDirection(Sun(45, 90)), SunDirection(Sun(45, 180)),
                                              Eigen::Vector3f::Zero()};
-  MarkSunlight(mesh, normals, suns, &views);
+  // View 0 is paired with views 1 and 2; a sun only view 3 (not a partner) saw is not traced.
+  const std::vector<Eigen::Vector3f> all_suns = {suns[0], suns[1], suns[2], SunDirection(Sun(60, 0))};
+  MarkSunlight(mesh, normals, all_suns, {{0, 1}, {2, 0}, {1, 3}}, &views);
   const std::vector<uint64_t>& lit = views[0].hit_map.sunlit;
   ASSERT_EQ(lit.size(), points.size());
   EXPECT_EQ(views[0].hit_map.suns_marked, 0b011u);
