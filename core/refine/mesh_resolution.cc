@@ -52,7 +52,7 @@ std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eige
       r.origin = points[i];
       r.direction = s == 0 ? directions[i] : Eigen::Vector3f(-directions[i]);
       r.t_near = 0.f;
-      r.t_far = float(reach_m);
+      r.t_far = directions[i].squaredNorm() > 0 ? float(reach_m) : 0.f;  // no direction: no hit
     }
   std::vector<RayHit> hits(2 * n);
   surface.Intersect(rays.data(), hits.data(), rays.size());

@@ -24,7 +24,8 @@ std::vector<char> FacesToSubdivide(const TriangleMesh& mesh, double tolerance_m)
 
 // Signed distance from each point to `surface` along its direction (unit): the nearest
 // hit of the two rays p + t d and p - t d within reach_m (positive: the surface lies on
-// the +d side); NaN where neither ray meets it.
+// the +d side; the + side wins a tie); NaN where neither ray meets it or d is zero.
+// Also step 5's offsets (significance.cc).
 std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eigen::Vector3f>& points,
                                  const std::vector<Eigen::Vector3f>& directions, double reach_m);
 

@@ -3,12 +3,12 @@
 #include <Eigen/Cholesky>
 
 #include <cmath>
-#include <limits>
 #include <vector>
 
 #include "core/common/error.h"
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
+#include "core/refine/mesh_resolution.h"
 
 namespace satmesh {
 
@@ -72,24 +72,11 @@ SignificanceStats KeepSignificantChanges(const TriangleMesh& initial, double k, 
       }
   }
   // Each vertex's offset from the initial surface along its normal: x = x0 + d n, so the
-  // initial surface ahead at t means d = -t (NaN: none within reach).
-  std::vector<Ray> rays(2 * nv);
-  std::vector<RayHit> hits(2 * nv);
+  // initial surface at signed distance t along n means d = -t (NaN: none within reach).
   std::vector<double> offsets(nv);
   const auto measure_offsets = [&] {
-    for (size_t v = 0; v < nv; ++v) {
-      const float reach = normals[v].squaredNorm() > 0 ? float(max_offset_m) : 0.f;  // none: no hit
-      rays[2 * v] = Ray{mesh->vertices[v], normals[v], 0.f, reach};
-      rays[2 * v + 1] = Ray{mesh->vertices[v], -normals[v], 0.f, reach};
-    }
-    scene.Intersect(rays.data(), hits.data(), rays.size());
-    for (size_t v = 0; v < nv; ++v) {
-      const RayHit& ahead = hits[2 * v];
-      const RayHit& behind = hits[2 * v + 1];
-      if (ahead.hit() && (!behind.hit() || ahead.t <= behind.t)) offsets[v] = -ahead.t;
-      else if (behind.hit()) offsets[v] = behind.t;
-      else offsets[v] = std::numeric_limits<double>::quiet_NaN();
-    }
+    const std::vector<float> along = DistanceAlong(scene, mesh->vertices, normals, max_offset_m);
+    for (size_t v = 0; v < nv; ++v) offsets[v] = -double(along[v]);  // NaN stays NaN
   };
   measure_offsets();
   const std::vector<double> sigmas(mesh->height_sigma.begin(), mesh->height_sigma.end());
