@@ -100,6 +100,16 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "(z^4 + this^4), z = offset / its height sigma from the images, so a change within the "
        "images' noise returns to the initial surface; 0: off; -1: 2 for a mesh start (a model "
        "the user trusts, a previous result), off for a DSM start (stereo DSMs err beyond noise)"},
+      {"keep_initial_scales", &R::keep_initial_scales, Range::In(0, 6),
+       "the last step first keeps the share of the offsets that is coherent beyond the images' "
+       "noise over the vertices around each one on the same surface, at radii 8 x 2^i GSD (3: "
+       "32, 16, 8 GSD, coarse to fine), so a start that is off smoothly (a roof 0.5 m too "
+       "high) is corrected where each vertex's own offset is within its noise; then each "
+       "vertex's own test on what is left; 0: per vertex only"},
+      {"keep_initial_floor_gsd", &R::keep_initial_floor_gsd, Range::AtLeast(0),
+       "the pooled tests' noise (keep_initial_scales) never below this many GSD: the bias "
+       "estimation's residual (~0.07 px, through a pair at B/H 0.35) is common to a whole "
+       "region, so no pooling gets below it"},
       {"register_to_initial", &R::register_to_initial, Range::In(-1, 1),
        "the result in the initial surface's frame: the bias estimation puts the image block "
        "where its pairs agree best on the initial surface (else the datum of minimum "

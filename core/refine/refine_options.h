@@ -106,6 +106,12 @@ struct RefineOptions {
                                    // the initial surface unless its offset from it exceeds
                                    // about this many of its height sigmas from the images;
                                    // 0: off; -1: 2 for a mesh start, off for a DSM start
+  int keep_initial_scales = 3;     // the last step first keeps what is coherent beyond the
+                                   // images' noise over neighbourhoods of radius 32, 16, 8
+                                   // GSD (coarse to fine: PooledSignificantOffsets), then
+                                   // tests what is left per vertex; 0: per vertex only
+  double keep_initial_floor_gsd = 0.2;  // the pooled tests' noise never below this (GSD):
+                                   // what the bias estimation leaves is common to a region
   int register_to_initial = -1;    // the result in the initial surface's frame: the bias
                                    // estimation puts the block where the images agree best
                                    // on the initial surface (SurfaceDatum; else the datum of

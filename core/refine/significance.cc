@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -11,6 +12,14 @@
 #include "core/refine/mesh_resolution.h"
 
 namespace satmesh {
+namespace {
+
+double SignificanceGain(double z, double k) {
+  const double z4 = z * z * z * z, k4 = k * k * k * k;
+  return z4 / (z4 + k4);
+}
+
+}  // namespace
 
 Eigen::Vector3d RegisterToInitial(const std::vector<Eigen::Vector3f>& normals,
                                   const std::vector<double>& offsets,
@@ -48,13 +57,96 @@ Eigen::Vector3d RegisterToInitial(const std::vector<Eigen::Vector3f>& normals,
   return t;
 }
 
-SignificanceStats KeepSignificantChanges(const TriangleMesh& initial, double k, double max_offset_m,
-                                         bool hold_boundary_xy, bool register_to_initial,
-                                         TriangleMesh* mesh) {
-  SATMESH_CHECK((k > 0 || (k == 0 && register_to_initial)) && max_offset_m > 0,
+std::vector<double> PooledSignificantOffsets(const TriangleMesh& mesh,
+                                             const std::vector<Eigen::Vector3f>& normals,
+                                             const std::vector<double>& offsets,
+                                             const std::vector<double>& sigmas, double radius_m,
+                                             double inflation, double floor_m, double k) {
+  const size_t nv = mesh.vertices.size();
+  SATMESH_CHECK(normals.size() == nv && offsets.size() == nv && sigmas.size() == nv &&
+                    radius_m > 0 && inflation >= 1 && floor_m >= 0 && k > 0,
+                ErrorCode::kInvalidArgument,
+                "PooledSignificantOffsets: one normal, offset and sigma per vertex; radius > 0, "
+                "inflation >= 1, floor >= 0, k > 0");
+  const VertexAdjacency adjacency = BuildVertexAdjacency(mesh);
+  std::vector<char> counts(nv);
+  for (size_t v = 0; v < nv; ++v)
+    counts[v] = std::isfinite(offsets[v]) && std::isfinite(sigmas[v]) && sigmas[v] > 0;
+  const float r2 = float(radius_m * radius_m);
+  constexpr float kSameSurfaceCos = 0.8f;  // normals within 37 degrees
+  constexpr double kTukeySigmas = 4;
+  std::vector<double> kept(nv, 0.0);
+#pragma omp parallel
+  {
+    std::vector<int> stamp(nv, -1);  // the vertex whose neighbourhood last reached it
+    std::vector<int> queue;
+    std::vector<double> values, kernels, inverse_variances, sorted;
+#pragma omp for schedule(dynamic, 1024)
+    for (long long vi = 0; vi < (long long)nv; ++vi) {
+      const int v = int(vi);
+      const Eigen::Vector3f n = normals[v];
+      if (std::isnan(offsets[v]) || n.squaredNorm() == 0) continue;
+      const Eigen::Vector3f p = mesh.vertices[v];
+      queue.assign(1, v);
+      values.clear();
+      kernels.clear();
+      inverse_variances.clear();
+      stamp[v] = v;
+      for (size_t qi = 0; qi < queue.size(); ++qi) {
+        const int u = queue[qi];
+        if (counts[u]) {
+          const double q = 1 - double((mesh.vertices[u] - p).squaredNorm()) / double(r2);
+          values.push_back(offsets[u]);
+          kernels.push_back(q * q);
+          inverse_variances.push_back(1 / (sigmas[u] * sigmas[u]));
+        }
+        for (int e = adjacency.neighbor_offsets[u]; e < adjacency.neighbor_offsets[u + 1]; ++e) {
+          const int w = adjacency.neighbors[e];
+          if (stamp[w] == v) continue;
+          stamp[w] = v;
+          if ((mesh.vertices[w] - p).squaredNorm() < r2 && normals[w].dot(n) >= kSameSurfaceCos)
+            queue.push_back(w);
+        }
+      }
+      if (values.empty()) continue;
+      sorted = values;
+      std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+      double mean = sorted[sorted.size() / 2];
+      double sum_w = 0, sum_w2s2 = 0;
+      for (int it = 0; it < 3; ++it) {
+        double sum_wd = 0;
+        sum_w = sum_w2s2 = 0;
+        for (size_t i = 0; i < values.size(); ++i) {
+          const double e = values[i] - mean;
+          const double t = e * e * inverse_variances[i] / (kTukeySigmas * kTukeySigmas);
+          if (t >= 1) continue;
+          const double w = kernels[i] * (1 - t) * (1 - t) * inverse_variances[i];
+          sum_w += w;
+          sum_wd += w * values[i];
+          sum_w2s2 += w * w / inverse_variances[i];
+        }
+        if (!(sum_w > 0)) break;
+        mean = sum_wd / sum_w;
+      }
+      if (!(sum_w > 0)) continue;
+      const double sigma = std::sqrt(inflation * sum_w2s2 / (sum_w * sum_w) + floor_m * floor_m);
+      kept[v] = SignificanceGain(mean / sigma, k) * mean;
+    }
+  }
+  return kept;
+}
+
+SignificanceStats KeepSignificantChanges(const TriangleMesh& initial,
+                                         const SignificanceOptions& options, TriangleMesh* mesh) {
+  const double k = options.k, max_offset_m = options.max_offset_m;
+  const bool hold_boundary_xy = options.hold_boundary_xy;
+  const bool register_to_initial = options.register_to_initial;
+  SATMESH_CHECK((k > 0 || (k == 0 && register_to_initial)) && max_offset_m > 0 &&
+                    options.scales >= 0 && (options.scales == 0 || options.gsd_m > 0) &&
+                    options.floor_gsd >= 0 && options.window_radius >= 0,
                 ErrorCode::kInvalidArgument,
                 "KeepSignificantChanges: k must be > 0 (0 only with the registration), "
-                "max_offset_m > 0");
+                "max_offset_m > 0, scales >= 0 (> 0: a GSD > 0), floor >= 0");
   const size_t nv = mesh->vertices.size();
   SATMESH_CHECK(mesh->height_sigma.size() == nv, ErrorCode::kInvalidArgument,
                 "KeepSignificantChanges: the mesh has no height sigma per vertex");
@@ -87,20 +179,46 @@ SignificanceStats KeepSignificantChanges(const TriangleMesh& initial, double k, 
     for (size_t v = 0; v < nv; ++v) mesh->vertices[v] -= held[v] ? Eigen::Vector3f(0, 0, t.z()) : t;
     measure_offsets();
   }
-  const double k4 = k * k * k * k;
-  double gain_sum = 0;
+  // Coarse to fine: each radius keeps what is coherent in what the coarser ones left.
+  std::vector<double> pooled(nv, 0.0), residual = offsets;
+  if (k > 0 && options.scales > 0) {
+    double area = 0;
+    for (float a : FaceAreas(*mesh)) area += a;
+    const double vertex_px = area / double(nv) / (options.gsd_m * options.gsd_m);
+    const double window = 2 * options.window_radius + 1;
+    const double inflation = std::max(1.0, window * window / vertex_px);
+    for (int i = options.scales - 1; i >= 0; --i) {
+      const double radius_m = 8 * std::ldexp(1.0, i) * options.gsd_m;
+      const std::vector<double> kept = PooledSignificantOffsets(
+          *mesh, normals, residual, sigmas, radius_m, inflation, options.floor_gsd * options.gsd_m, k);
+      for (size_t v = 0; v < nv; ++v) {
+        pooled[v] += kept[v];
+        residual[v] -= kept[v];
+      }
+    }
+  }
+  double gain_sum = 0, pooled_sum = 0;
   for (size_t v = 0; v < nv; ++v) {
     const double d = offsets[v];
     if (std::isnan(d)) continue;
     const double sigma = sigmas[v];
-    const double z = std::isfinite(sigma) && sigma > 0 ? d / sigma : 0.0;
-    const double z4 = z * z * z * z;
-    const double gain = k4 > 0 ? z4 / (z4 + k4) : 1.0;  // k = 0: the registration only
-    mesh->vertices[v] -= float((1 - gain) * d) * normals[v];
-    gain_sum += gain;
+    const double r = residual[v];
+    const double z = std::isfinite(sigma) && sigma > 0 ? r / sigma : 0.0;
+    const double gain = k > 0 ? SignificanceGain(z, k) : 1.0;  // k = 0: the registration only
+    const double keep = pooled[v] + gain * r;
+    mesh->vertices[v] -= float(d - keep) * normals[v];
+    if (d != 0) {
+      gain_sum += std::clamp(keep / d, 0.0, 1.0);
+      pooled_sum += std::clamp(pooled[v] / d, 0.0, 1.0);
+    } else {
+      gain_sum += 1;
+    }
     ++stats.vertices;
   }
-  if (stats.vertices > 0) stats.mean_gain = gain_sum / double(stats.vertices);
+  if (stats.vertices > 0) {
+    stats.mean_gain = gain_sum / double(stats.vertices);
+    stats.pooled_share = pooled_sum / double(stats.vertices);
+  }
   return stats;
 }
 
