@@ -228,7 +228,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
 // Tested per vertex only, a start that is off smoothly (the truth moved 1 m by smooth noise)
 // kept its error where the images correct it only as a whole (multi-date 0.5 m roofs 0.211
 // / 0.236 m, the DSM start 0.211 / 0.227 m): the pooled tests first (keep_initial_scales)
-// give 0.206 / 0.221 m, a true start 0.040 / 0.032 m (was 0.035 / 0.025): session 20.
+// give 0.192 / 0.202 m, a true start 0.045 / 0.038 m (was 0.035 / 0.025): session 20.
 void KeepInitialWithinNoise(const RefineInput& input, const RefineOptions& options,
                             RefineResult* result) {
   const double k = options.keep_initial_sigmas < 0 ? (input.initial_is_mesh ? 2.0 : 0.0)
@@ -245,7 +245,6 @@ void KeepInitialWithinNoise(const RefineInput& input, const RefineOptions& optio
   significance.scales = options.keep_initial_scales;
   significance.gsd_m = result->gsd_m;
   significance.floor_gsd = options.keep_initial_floor_gsd;
-  significance.window_radius = options.zncc_window_radius;
   const SignificanceStats stats = KeepSignificantChanges(input.initial_mesh, significance, &result->mesh);
   result->kept_initial_share = 1 - stats.mean_gain;
   result->registration_m = stats.registration_m;

@@ -108,8 +108,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "vertex's own test on what is left; 0: per vertex only"},
       {"keep_initial_floor_gsd", &R::keep_initial_floor_gsd, Range::AtLeast(0),
        "the pooled tests' noise (keep_initial_scales) never below this many GSD: the bias "
-       "estimation's residual (~0.07 px, through a pair at B/H 0.35) is common to a whole "
-       "region, so no pooling gets below it"},
+       "estimation's residual (up to 0.05 px, through a pair at B/H 0.35) is common to a "
+       "whole region, so no pooling gets below it"},
       {"register_to_initial", &R::register_to_initial, Range::In(-1, 1),
        "the result in the initial surface's frame: the bias estimation puts the image block "
        "where its pairs agree best on the initial surface (else the datum of minimum "

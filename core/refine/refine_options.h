@@ -110,7 +110,7 @@ struct RefineOptions {
                                    // images' noise over neighbourhoods of radius 32, 16, 8
                                    // GSD (coarse to fine: PooledSignificantOffsets), then
                                    // tests what is left per vertex; 0: per vertex only
-  double keep_initial_floor_gsd = 0.2;  // the pooled tests' noise never below this (GSD):
+  double keep_initial_floor_gsd = 0.15;  // the pooled tests' noise never below this (GSD):
                                    // what the bias estimation leaves is common to a region
   int register_to_initial = -1;    // the result in the initial surface's frame: the bias
                                    // estimation puts the block where the images agree best

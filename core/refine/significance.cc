@@ -61,13 +61,13 @@ std::vector<double> PooledSignificantOffsets(const TriangleMesh& mesh,
                                              const std::vector<Eigen::Vector3f>& normals,
                                              const std::vector<double>& offsets,
                                              const std::vector<double>& sigmas, double radius_m,
-                                             double inflation, double floor_m, double k) {
+                                             double floor_m, double k) {
   const size_t nv = mesh.vertices.size();
   SATMESH_CHECK(normals.size() == nv && offsets.size() == nv && sigmas.size() == nv &&
-                    radius_m > 0 && inflation >= 1 && floor_m >= 0 && k > 0,
+                    radius_m > 0 && floor_m >= 0 && k > 0,
                 ErrorCode::kInvalidArgument,
                 "PooledSignificantOffsets: one normal, offset and sigma per vertex; radius > 0, "
-                "inflation >= 1, floor >= 0, k > 0");
+                "floor >= 0, k > 0");
   const VertexAdjacency adjacency = BuildVertexAdjacency(mesh);
   std::vector<char> counts(nv);
   for (size_t v = 0; v < nv; ++v)
@@ -129,7 +129,7 @@ std::vector<double> PooledSignificantOffsets(const TriangleMesh& mesh,
         mean = sum_wd / sum_w;
       }
       if (!(sum_w > 0)) continue;
-      const double sigma = std::sqrt(inflation * sum_w2s2 / (sum_w * sum_w) + floor_m * floor_m);
+      const double sigma = std::sqrt(sum_w2s2 / (sum_w * sum_w) + floor_m * floor_m);
       kept[v] = SignificanceGain(mean / sigma, k) * mean;
     }
   }
@@ -143,7 +143,7 @@ SignificanceStats KeepSignificantChanges(const TriangleMesh& initial,
   const bool register_to_initial = options.register_to_initial;
   SATMESH_CHECK((k > 0 || (k == 0 && register_to_initial)) && max_offset_m > 0 &&
                     options.scales >= 0 && (options.scales == 0 || options.gsd_m > 0) &&
-                    options.floor_gsd >= 0 && options.window_radius >= 0,
+                    options.floor_gsd >= 0,
                 ErrorCode::kInvalidArgument,
                 "KeepSignificantChanges: k must be > 0 (0 only with the registration), "
                 "max_offset_m > 0, scales >= 0 (> 0: a GSD > 0), floor >= 0");
@@ -182,15 +182,10 @@ SignificanceStats KeepSignificantChanges(const TriangleMesh& initial,
   // Coarse to fine: each radius keeps what is coherent in what the coarser ones left.
   std::vector<double> pooled(nv, 0.0), residual = offsets;
   if (k > 0 && options.scales > 0) {
-    double area = 0;
-    for (float a : FaceAreas(*mesh)) area += a;
-    const double vertex_px = area / double(nv) / (options.gsd_m * options.gsd_m);
-    const double window = 2 * options.window_radius + 1;
-    const double inflation = std::max(1.0, window * window / vertex_px);
     for (int i = options.scales - 1; i >= 0; --i) {
       const double radius_m = 8 * std::ldexp(1.0, i) * options.gsd_m;
       const std::vector<double> kept = PooledSignificantOffsets(
-          *mesh, normals, residual, sigmas, radius_m, inflation, options.floor_gsd * options.gsd_m, k);
+          *mesh, normals, residual, sigmas, radius_m, options.floor_gsd * options.gsd_m, k);
       for (size_t v = 0; v < nv; ++v) {
         pooled[v] += kept[v];
         residual[v] -= kept[v];

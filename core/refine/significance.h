@@ -39,8 +39,7 @@ struct SignificanceOptions {
   // 8 x 2^i GSD, i = scales - 1 .. 0 (coarse to fine); 0: each vertex alone.
   int scales = 0;
   double gsd_m = 0;           // the images' GSD (> 0 when scales > 0)
-  double floor_gsd = 0.2;     // RefineOptions::keep_initial_floor_gsd
-  int window_radius = 2;      // the ZNCC window (2r+1)², whose pixels share their noise
+  double floor_gsd = 0.15;    // RefineOptions::keep_initial_floor_gsd
 };
 
 // A share of `offsets` kept where it is coherent around each vertex beyond the images'
@@ -48,15 +47,15 @@ struct SignificanceOptions {
 // mean of the offsets of the vertices around it on the same surface (reached from v over
 // the mesh's edges through vertices whose normals are within 37 degrees of v's, within
 // radius_m; weights (1 - r²/R²)² / sigma², robust: from their median, Tukey's biweight at
-// 4 of each vertex's sigmas), its noise sigma_m² = inflation x (the weighted mean's
-// variance from the vertices' sigmas) + floor_m², and the returned value is g(mean /
-// sigma_m) x mean, g(z) = z^4 / (z^4 + k^4). Vertices whose offset is NaN, or whose sigma
+// 4 of each vertex's sigmas), its noise sigma_m² = the weighted mean's variance from the
+// vertices' sigmas + floor_m², and the returned value is g(mean / sigma_m) x mean,
+// g(z) = z^4 / (z^4 + k^4). Vertices whose offset is NaN, or whose sigma
 // is not finite and > 0, count for nothing; a vertex with none around it gets 0.
 std::vector<double> PooledSignificantOffsets(const TriangleMesh& mesh,
                                              const std::vector<Eigen::Vector3f>& normals,
                                              const std::vector<double>& offsets,
                                              const std::vector<double>& sigmas, double radius_m,
-                                             double inflation, double floor_m, double k);
+                                             double floor_m, double k);
 
 // For each vertex of `mesh` (the refined surface, with mesh->height_sigma from the images'
 // Fisher information, metres), its offset d from `initial` along its normal (the nearer
@@ -66,10 +65,8 @@ std::vector<double> PooledSignificantOffsets(const TriangleMesh& mesh,
 // over a neighbourhood (PooledSignificantOffsets at radii 32, 16, 8 GSD for 3 scales:
 // a smooth error of the start, a building's roof off by 0.5 m, is corrected by hundreds
 // of vertices whose offsets are each within their noise), each radius on what the
-// coarser ones left; the pooled noise is inflated by the ZNCC window's area over the
-// area per vertex (a pixel's noise enters every window that holds it, so a region has
-// that many times fewer independent samples than pixels), and floored at floor_gsd (the
-// bias estimation's residual, ~0.07 px through a pair at B/H 0.35, is the same over a
+// coarser ones left; the pooled noise is floored at floor_gsd (the bias estimation's
+// residual, up to 0.05 px through a pair at B/H 0.35, is the same over a
 // whole region: no pooling gets below it). Then what is left of each vertex's offset, r,
 // with the weight g = z^4 / (z^4 + k^4), z = r / sigma: a change of less than about k
 // sigmas, which the images' noise alone makes, returns to the initial surface; a larger
