@@ -58,17 +58,18 @@ Eigen::Vector3d RegisterToInitial(const std::vector<Eigen::Vector3f>& normals,
 }
 
 std::vector<double> PooledSignificantOffsets(const TriangleMesh& mesh,
+                                             const VertexAdjacency& adjacency,
                                              const std::vector<Eigen::Vector3f>& normals,
                                              const std::vector<double>& offsets,
                                              const std::vector<double>& sigmas, double radius_m,
                                              double floor_m, double k) {
   const size_t nv = mesh.vertices.size();
   SATMESH_CHECK(normals.size() == nv && offsets.size() == nv && sigmas.size() == nv &&
-                    radius_m > 0 && floor_m >= 0 && k > 0,
+                    adjacency.neighbor_offsets.size() == nv + 1 && radius_m > 0 &&
+                    floor_m >= 0 && k > 0,
                 ErrorCode::kInvalidArgument,
-                "PooledSignificantOffsets: one normal, offset and sigma per vertex; radius > 0, "
-                "floor >= 0, k > 0");
-  const VertexAdjacency adjacency = BuildVertexAdjacency(mesh);
+                "PooledSignificantOffsets: one normal, offset and sigma per vertex, the mesh's "
+                "adjacency; radius > 0, floor >= 0, k > 0");
   std::vector<char> counts(nv);
   for (size_t v = 0; v < nv; ++v)
     counts[v] = std::isfinite(offsets[v]) && std::isfinite(sigmas[v]) && sigmas[v] > 0;
@@ -155,8 +156,11 @@ SignificanceStats KeepSignificantChanges(const TriangleMesh& initial,
   const RayScene scene(initial);
   std::vector<Eigen::Vector3f> normals = VertexNormals(*mesh);
   std::vector<char> held(nv, 0);  // border vertices that move vertically only
+  const bool pools = k > 0 && options.scales > 0;
+  // Built once: the border below and every radius of the pooled tests walk it.
+  const VertexAdjacency adjacency =
+      hold_boundary_xy || pools ? BuildVertexAdjacency(*mesh) : VertexAdjacency{};
   if (hold_boundary_xy) {
-    const VertexAdjacency adjacency = BuildVertexAdjacency(*mesh);
     for (size_t v = 0; v < nv; ++v)
       if (adjacency.is_boundary[v] && normals[v].squaredNorm() > 0) {
         normals[v] = Eigen::Vector3f(0, 0, normals[v].z() >= 0 ? 1.f : -1.f);
@@ -181,11 +185,12 @@ SignificanceStats KeepSignificantChanges(const TriangleMesh& initial,
   }
   // Coarse to fine: each radius keeps what is coherent in what the coarser ones left.
   std::vector<double> pooled(nv, 0.0), residual = offsets;
-  if (k > 0 && options.scales > 0) {
+  if (pools) {
     for (int i = options.scales - 1; i >= 0; --i) {
       const double radius_m = 8 * std::ldexp(1.0, i) * options.gsd_m;
-      const std::vector<double> kept = PooledSignificantOffsets(
-          *mesh, normals, residual, sigmas, radius_m, options.floor_gsd * options.gsd_m, k);
+      const std::vector<double> kept =
+          PooledSignificantOffsets(*mesh, adjacency, normals, residual, sigmas, radius_m,
+                                   options.floor_gsd * options.gsd_m, k);
       for (size_t v = 0; v < nv; ++v) {
         pooled[v] += kept[v];
         residual[v] -= kept[v];

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/mesh/mesh.h"
+#include "core/mesh/topology.h"
 
 namespace satmesh {
 
@@ -51,7 +52,9 @@ struct SignificanceOptions {
 // vertices' sigmas + floor_m², and the returned value is g(mean / sigma_m) x mean,
 // g(z) = z^4 / (z^4 + k^4). Vertices whose offset is NaN, or whose sigma
 // is not finite and > 0, count for nothing; a vertex with none around it gets 0.
+// `adjacency`: BuildVertexAdjacency(mesh), built once by the caller for all radii.
 std::vector<double> PooledSignificantOffsets(const TriangleMesh& mesh,
+                                             const VertexAdjacency& adjacency,
                                              const std::vector<Eigen::Vector3f>& normals,
                                              const std::vector<double>& offsets,
                                              const std::vector<double>& sigmas, double radius_m,

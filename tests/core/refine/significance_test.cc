@@ -281,11 +281,12 @@ TEST(PooledSignificantOffsets, StaysOnTheVertexsOwnSurface) {
   for (auto& p : mesh.vertices)
     if (on_roof(p)) p.z() = 4.f;
   const std::vector<Eigen::Vector3f> normals = VertexNormals(mesh);
+  const VertexAdjacency adjacency = BuildVertexAdjacency(mesh);
   std::vector<double> offsets(mesh.num_vertices()), sigmas(mesh.num_vertices(), 0.5);
   for (size_t v = 0; v < offsets.size(); ++v) offsets[v] = on_roof(mesh.vertices[v]) ? 0.5 : 0.0;
   const std::vector<double> kept =
-      PooledSignificantOffsets(mesh, normals, offsets, sigmas, /*radius_m=*/8, /*floor_m=*/0.05,
-                               /*k=*/2);
+      PooledSignificantOffsets(mesh, adjacency, normals, offsets, sigmas, /*radius_m=*/8,
+                               /*floor_m=*/0.05, /*k=*/2);
   int roof = 0, ground_near = 0;
   for (size_t v = 0; v < kept.size(); ++v) {
     const Eigen::Vector3f& p = mesh.vertices[v];
@@ -304,8 +305,11 @@ TEST(PooledSignificantOffsets, StaysOnTheVertexsOwnSurface) {
   }
   EXPECT_GT(roof, 200);
   EXPECT_GT(ground_near, 300);
-  EXPECT_THROW(PooledSignificantOffsets(mesh, normals, offsets, {}, 8, 0.05, 2), Error);
-  EXPECT_THROW(PooledSignificantOffsets(mesh, normals, offsets, sigmas, 8, -0.1, 2), Error);
+  EXPECT_THROW(PooledSignificantOffsets(mesh, adjacency, normals, offsets, {}, 8, 0.05, 2), Error);
+  EXPECT_THROW(PooledSignificantOffsets(mesh, adjacency, normals, offsets, sigmas, 8, -0.1, 2),
+               Error);
+  EXPECT_THROW(PooledSignificantOffsets(mesh, VertexAdjacency{}, normals, offsets, sigmas, 8, 0.05, 2),
+               Error);
 }
 
 }  // namespace
