@@ -1,5 +1,8 @@
 #include "core/refine/coarse_mesh.h"
 
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
@@ -15,6 +18,7 @@
 #include <unordered_map>
 
 #include "core/common/error.h"
+#include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
 
 namespace satmesh {
@@ -175,9 +179,87 @@ void SplitLongBlockBorders(double max_len, TriangleMesh* mesh, std::vector<int>*
   }
 }
 
+// The tangential relaxation of isotropic remeshing (Botsch and Kobbelt): each vertex inside
+// the surface (no border or constrained edge at it) whose faces are near one plane moves to the barycentre of its
+// neighbours projected onto its tangent plane (area-weighted normal); a move that turns a
+// face around it by 90 degrees or more, or makes one degenerate, is halved up to five times,
+// then dropped. CGAL 5.5's own (inside isotropic_remeshing) reads a null halfedge when every
+// face around a moved vertex is degenerate (a vertex of two faces back to back: a
+// tri-stereo building mesh remeshed at 2 m crashed), so it is off there and done here.
+template <typename ConstraintMap>
+void RelaxTangentially(ConstraintMap is_constrained, SurfaceMesh* sm) {
+  using Vector = Eigen::Vector3d;
+  const auto at = [&](SurfaceMesh::Vertex_index v) {
+    const auto& p = sm->point(v);
+    return Vector(p.x(), p.y(), p.z());
+  };
+  const auto face_normal = [&](SurfaceMesh::Face_index f) {  // not normalised (2 x area)
+    std::array<Vector, 3> q;
+    int k = 0;
+    for (auto w : CGAL::vertices_around_face(sm->halfedge(f), *sm)) q[k++] = at(w);
+    return Vector((q[1] - q[0]).cross(q[2] - q[0]));
+  };
+  std::vector<std::pair<SurfaceMesh::Vertex_index, Vector>> moves;
+  for (auto v : sm->vertices()) {
+    if (sm->is_isolated(v) || sm->is_border(v, /*check_all_incident_halfedges=*/true)) continue;
+    Vector centre = Vector::Zero(), normal = Vector::Zero();
+    int n = 0;
+    bool free = true;
+    for (auto h : CGAL::halfedges_around_target(sm->halfedge(v), *sm)) {
+      if (is_constrained[sm->edge(h)]) {
+        free = false;
+        break;
+      }
+      centre += at(sm->source(h));
+      ++n;
+      if (!sm->is_border(h)) normal += face_normal(sm->face(h));
+    }
+    if (!free || n < 3 || !(normal.squaredNorm() > 0)) continue;
+    centre /= n;
+    normal.normalize();
+    // Only where the faces around are near one plane (within 20 degrees): a move in the
+    // tangent plane stays on the surface (CGAL projects back onto the input; not done here,
+    // so creases are not rounded off).
+    bool planar = true;
+    for (auto f : CGAL::faces_around_target(sm->halfedge(v), *sm)) {
+      if (f == SurfaceMesh::null_face()) continue;
+      const Vector nf = face_normal(f);
+      if (!(nf.dot(normal) > 0.94 * nf.norm())) {
+        planar = false;
+        break;
+      }
+    }
+    if (!planar) continue;
+    const Vector p = at(v);
+    moves.emplace_back(v, centre + (p - centre).dot(normal) * normal);
+  }
+  for (const auto& [v, target] : moves) {
+    const Vector from = at(v);
+    std::vector<std::pair<SurfaceMesh::Face_index, Vector>> before;
+    for (auto f : CGAL::faces_around_target(sm->halfedge(v), *sm))
+      if (f != SurfaceMesh::null_face()) before.emplace_back(f, face_normal(f));
+    double frac = 1;
+    for (int attempt = 0; attempt <= 5; ++attempt, frac *= 0.5) {
+      const Vector q = attempt == 5 ? from : Vector(from + frac * (target - from));
+      sm->point(v) = Kernel::Point_3(q.x(), q.y(), q.z());
+      if (attempt == 5) break;
+      bool ok = true;
+      for (const auto& [f, n0] : before) {
+        const Vector n1 = face_normal(f);
+        if (!(n1.squaredNorm() > 1e-12 * n0.squaredNorm()) || !(n1.dot(n0) > 0)) {
+          ok = false;
+          break;
+        }
+      }
+      if (ok) break;
+    }
+  }
+}
+
 // CGAL's isotropic remeshing of all of `sm`, iterations one at a time (cancellation
-// reaches it within one). The constrained edges are kept where they are: split and
-// collapsed (protect = false) or kept as they are (protect = true).
+// reaches it within one), each with its tangential relaxation (RelaxTangentially). The
+// constrained edges are kept where they are: split and collapsed (protect = false) or kept
+// as they are (protect = true).
 template <typename ConstraintMap>
 void RemeshInPlace(const CoarseMeshOptions& options, ConstraintMap is_constrained, bool protect,
                    const std::function<bool()>& cancelled, SurfaceMesh* sm) {
@@ -185,9 +267,11 @@ void RemeshInPlace(const CoarseMeshOptions& options, ConstraintMap is_constraine
     if (cancelled()) return;
     PMP::isotropic_remeshing(faces(*sm), options.target_edge_m, *sm,
                              PMP::parameters::number_of_iterations(1)
+                                 .number_of_relaxation_steps(0)
                                  .edge_is_constrained_map(is_constrained)
                                  .protect_constraints(protect)
                                  .relax_constraints(false));
+    RelaxTangentially(is_constrained, sm);
   }
 }
 
@@ -202,7 +286,8 @@ struct BlockResult {
 };
 
 BlockResult RemeshBlock(const TriangleMesh& mesh, const std::vector<int>& face_ids,
-                        const CoarseMeshOptions& options, const std::function<bool()>& cancelled) {
+                        const CoarseMeshOptions& options, const std::function<bool()>& cancelled,
+                        bool remesh = true) {
   BlockResult out;
   std::unordered_map<int, SurfaceMesh::Vertex_index> local;
   auto g = out.sm.add_property_map<SurfaceMesh::Vertex_index, int>("v:global", -1).first;
@@ -221,13 +306,13 @@ BlockResult RemeshBlock(const TriangleMesh& mesh, const std::vector<int>& face_i
     if (out.sm.add_face(a, b, c) == SurfaceMesh::null_face()) out.kept.push_back(t);
   }
   DropIsolatedVertices(&out.sm);
-  if (out.sm.number_of_faces() > 0)
+  if (remesh && out.sm.number_of_faces() > 0)
     RemeshInPlace(options, ConstrainBorder(&out.sm), /*protect=*/true, cancelled, &out.sm);
   out.sm.collect_garbage();
   out.global.assign(out.sm.number_of_vertices(), -1);
   // Interior input vertices were moved: only the (protected) border's are shared.
   for (auto v : out.sm.vertices())
-    if (out.sm.is_border(v)) out.global[uint32_t(v)] = g[v];
+    if (!remesh || out.sm.is_border(v)) out.global[uint32_t(v)] = g[v];
   return out;
 }
 
@@ -242,6 +327,47 @@ SurfaceMesh RemeshWhole(const TriangleMesh& mesh, const CoarseMeshOptions& optio
   RemeshInPlace(options, ConstrainBorder(&sm), /*protect=*/false,
                 [&] { return progress.Cancelled(); }, &sm);
   progress.ThrowIfCancelled();
+  return sm;
+}
+
+// The blocks' results as one mesh: a kept input vertex of `mesh` is one vertex of the
+// whole (marked in the "v:seed" property), a new one is its block's own. Consumes the
+// results.
+SurfaceMesh StitchBlocks(const TriangleMesh& mesh, std::vector<BlockResult>* results) {
+  SurfaceMesh sm;
+  std::unordered_map<int, SurfaceMesh::Vertex_index> shared;
+  auto seed = sm.add_property_map<SurfaceMesh::Vertex_index, bool>("v:seed", false).first;
+  auto shared_vertex = [&](int i) {
+    auto [it, added] = shared.try_emplace(i);
+    if (added) {
+      const auto& p = mesh.vertices[i];
+      it->second = sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
+      seed[it->second] = true;
+    }
+    return it->second;
+  };
+  size_t dropped = 0;
+  for (BlockResult& r : *results) {
+    std::vector<SurfaceMesh::Vertex_index> index(r.sm.number_of_vertices());
+    for (auto v : r.sm.vertices()) {
+      const int gi = r.global[uint32_t(v)];
+      index[uint32_t(v)] = gi >= 0 ? shared_vertex(gi) : sm.add_vertex(r.sm.point(v));
+    }
+    for (auto f : r.sm.faces()) {
+      std::array<SurfaceMesh::Vertex_index, 3> tri;
+      int k = 0;
+      for (auto v : CGAL::vertices_around_face(r.sm.halfedge(f), r.sm)) tri[k++] = index[uint32_t(v)];
+      dropped += sm.add_face(tri[0], tri[1], tri[2]) == SurfaceMesh::null_face();
+    }
+    for (const auto& t : r.kept)
+      dropped += sm.add_face(shared_vertex(t[0]), shared_vertex(t[1]), shared_vertex(t[2])) ==
+                 SurfaceMesh::null_face();
+    r = BlockResult{};
+  }
+  if (dropped > 0) spdlog::debug("remesh: dropped {} non-manifold faces", dropped);
+  DropIsolatedVertices(&sm);
+  SATMESH_CHECK(sm.number_of_faces() > 0, ErrorCode::kInvalidInput,
+                "remesh: the initial mesh has no usable (manifold) face");
   return sm;
 }
 
@@ -269,41 +395,8 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
   if (failure) std::rethrow_exception(failure);
   progress.ThrowIfCancelled();
 
-  // Stitch: a kept input vertex is one vertex of the whole, a new one is its block's own.
-  SurfaceMesh sm;
-  std::unordered_map<int, SurfaceMesh::Vertex_index> shared;
-  auto seed = sm.add_property_map<SurfaceMesh::Vertex_index, bool>("v:seed", false).first;
-  auto shared_vertex = [&](int i) {
-    auto [it, added] = shared.try_emplace(i);
-    if (added) {
-      const auto& p = mesh.vertices[i];
-      it->second = sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
-      seed[it->second] = true;
-    }
-    return it->second;
-  };
-  size_t dropped = 0;
-  for (BlockResult& r : results) {
-    std::vector<SurfaceMesh::Vertex_index> index(r.sm.number_of_vertices());
-    for (auto v : r.sm.vertices()) {
-      const int gi = r.global[uint32_t(v)];
-      index[uint32_t(v)] = gi >= 0 ? shared_vertex(gi) : sm.add_vertex(r.sm.point(v));
-    }
-    for (auto f : r.sm.faces()) {
-      std::array<SurfaceMesh::Vertex_index, 3> tri;
-      int k = 0;
-      for (auto v : CGAL::vertices_around_face(r.sm.halfedge(f), r.sm)) tri[k++] = index[uint32_t(v)];
-      dropped += sm.add_face(tri[0], tri[1], tri[2]) == SurfaceMesh::null_face();
-    }
-    for (const auto& t : r.kept)
-      dropped += sm.add_face(shared_vertex(t[0]), shared_vertex(t[1]), shared_vertex(t[2])) ==
-                 SurfaceMesh::null_face();
-    r = BlockResult{};
-  }
-  if (dropped > 0) spdlog::debug("remesh: dropped {} non-manifold faces", dropped);
-  DropIsolatedVertices(&sm);
-  SATMESH_CHECK(sm.number_of_faces() > 0, ErrorCode::kInvalidInput,
-                "remesh: the initial mesh has no usable (manifold) face");
+  SurfaceMesh sm = StitchBlocks(mesh, &results);
+  auto seed = sm.property_map<SurfaceMesh::Vertex_index, bool>("v:seed").first;
 
   // The band: faces within two rings of a kept (border) vertex.
   std::vector<char> in_band(sm.number_of_faces(), 0);
@@ -330,12 +423,22 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
   const auto is_constrained = ConstrainBorder(&sm);
   spdlog::debug("remesh: {} blocks, band of {} faces", num_blocks, band.size());
   // The band in one call: its face range does not survive an iteration.
-  if (!band.empty())
-    PMP::isotropic_remeshing(band, options.target_edge_m, sm,
-                             PMP::parameters::number_of_iterations(options.iterations)
-                                 .edge_is_constrained_map(is_constrained)
-                                 .protect_constraints(false)
-                                 .relax_constraints(false));
+  // The band remeshed as one more block, its border (where it meets the blocks' remeshed
+  // insides) kept. Not as a face range of the whole: CGAL 5.5's remeshing of a face range
+  // within a larger mesh crashed in its tangential relaxation on a building mesh at 2 m
+  // edges (tri-stereo 0.5 m, the true mesh), a whole patch does not.
+  if (!band.empty()) {
+    const TriangleMesh whole = FromSurfaceMesh(sm, mesh);  // vertex and face i: sm's i
+    std::vector<int> band_ids(band.size());
+    for (size_t k = 0; k < band.size(); ++k) band_ids[k] = int(uint32_t(band[k]));
+    std::vector<BlockResult> parts(2);
+    parts[0] = RemeshBlock(whole, band_ids, options, cancelled, /*remesh=*/true);
+    std::vector<int> rest;
+    for (size_t f = 0; f < whole.faces.size(); ++f)
+      if (!in_band[f]) rest.push_back(int(f));
+    parts[1] = RemeshBlock(whole, rest, options, cancelled, /*remesh=*/false);
+    sm = StitchBlocks(whole, &parts);
+  }
   progress.ThrowIfCancelled();
   return sm;
 }
@@ -484,6 +587,74 @@ HoleFill FillHoles(double max_extent_m, std::vector<Eigen::Vector3d>* points,
   }
   faces->insert(faces->end(), kept.begin(), kept.end());
   return out;
+}
+
+TriangleMesh CarryDisplacement(const TriangleMesh& start, const TriangleMesh& end,
+                               TriangleMesh target) {
+  SATMESH_CHECK(start.num_vertices() == end.num_vertices() && start.num_faces() > 0,
+                ErrorCode::kInvalidArgument,
+                "CarryDisplacement: start and end must be one mesh with faces (" +
+                    std::to_string(start.num_vertices()) + " vs " +
+                    std::to_string(end.num_vertices()) + " vertices, " +
+                    std::to_string(start.num_faces()) + " faces)");
+  using Triangle = Kernel::Triangle_3;
+  using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle>::const_iterator>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+  const auto point = [&](int v) {
+    const Eigen::Vector3f& p = start.vertices[size_t(v)];
+    return Kernel::Point_3(p.x(), p.y(), p.z());
+  };
+  std::vector<Triangle> triangles;
+  triangles.reserve(start.num_faces());
+  std::vector<size_t> face_of;  // non-degenerate triangles only
+  for (size_t f = 0; f < start.num_faces(); ++f) {
+    const Eigen::Vector3i& t = start.faces[f];
+    Triangle tri(point(t[0]), point(t[1]), point(t[2]));
+    if (tri.is_degenerate()) continue;
+    triangles.push_back(tri);
+    face_of.push_back(f);
+  }
+  SATMESH_CHECK(!triangles.empty(), ErrorCode::kInvalidArgument,
+                "CarryDisplacement: start has only degenerate faces");
+  Tree tree(triangles.cbegin(), triangles.cend());
+  tree.accelerate_distance_queries();
+  const Eigen::Vector3d offset = target.origin - start.origin;
+  const std::vector<Eigen::Vector3f> normals = VertexNormals(target);
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (long v = 0; v < long(target.num_vertices()); ++v) {
+    const Eigen::Vector3d p = target.vertices[size_t(v)].cast<double>() + offset;
+    const auto [closest, it] = tree.closest_point_and_primitive(Kernel::Point_3(p.x(), p.y(), p.z()));
+    const size_t k = size_t(it - triangles.cbegin());
+    const Eigen::Vector3i& t = start.faces[face_of[k]];
+    // Barycentric coordinates of the closest point in its triangle (least squares, so a
+    // point on an edge is exact too).
+    const Eigen::Vector3d a = start.vertices[size_t(t[0])].cast<double>();
+    const Eigen::Vector3d e1 = start.vertices[size_t(t[1])].cast<double>() - a;
+    const Eigen::Vector3d e2 = start.vertices[size_t(t[2])].cast<double>() - a;
+    const Eigen::Vector3d q = Eigen::Vector3d(closest.x(), closest.y(), closest.z()) - a;
+    const double d00 = e1.dot(e1), d01 = e1.dot(e2), d11 = e2.dot(e2);
+    const double d20 = q.dot(e1), d21 = q.dot(e2);
+    const double den = d00 * d11 - d01 * d01;
+    const double b1 = std::clamp((d11 * d20 - d01 * d21) / den, 0.0, 1.0);
+    const double b2 = std::clamp((d00 * d21 - d01 * d20) / den, 0.0, 1.0 - b1);
+    const double b0 = 1.0 - b1 - b2;
+    Eigen::Vector3d moved = Eigen::Vector3d::Zero();
+    const double b[3] = {b0, b1, b2};
+    for (int c = 0; c < 3; ++c)
+      moved += b[c] * (end.vertices[size_t(t[c])] - start.vertices[size_t(t[c])]).cast<double>();
+    // Up-facing parts (roofs, ground) move with the coarse level; walls and overhangs,
+    // which a coarse mesh does not hold, keep their own place.
+    // And only where the coarse face is of the same surface (normals within 37 degrees,
+    // fading from 18): near a wall the coarse mesh bridges roof and street with a slope
+    // whose move is the wall's blur, not the roof's or the street's correction.
+    const Eigen::Vector3d n = normals[size_t(v)].cast<double>();
+    const double up = std::clamp((n.z() - 0.5) / 0.3, 0.0, 1.0);
+    const double same = std::clamp((e1.cross(e2).normalized().dot(n) - 0.8) / 0.15, 0.0, 1.0);
+    moved *= up * same;
+    target.vertices[size_t(v)] += moved.cast<float>();
+  }
+  target.height_sigma.clear();
+  return target;
 }
 
 }  // namespace satmesh

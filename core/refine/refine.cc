@@ -77,20 +77,23 @@ TriangleMesh InitialSurfaceAt(const RefineInput& input, const RefineOptions& opt
   return input.initial_for_edge(LevelEdge(options, gsd_m, level));
 }
 
-// The mesh the coarsest level starts from: the initial surface remeshed to the level's
-// triangle edge. At a full-resolution start (no coarser level) whose images do not
+// The mesh a level starts from, made from the initial surface: remeshed to the level's
+// triangle edge (the coarsest level and a finer level of a carried start:
+// CarriesCoarseLevels). At full resolution (level 0) where the images do not
 // resolve the surface to initial_detail_gsd (the median vertex's height sigma from the
 // pairs, LevelHeightSigma, above it: a stereo or tri-stereo pass), that mesh is subdivided
 // where it cannot hold the initial surface's detail (FollowInitialDetail): the iterations
 // at one level do not win back what the 2-pixel mesh smooths away (synthetic 0.7 m stereo
 // and tri-stereo, F-score @0.5 m 2-3 points higher; multi-date views resolve it and lose
 // 1 point of facades with it; docs/benchmarks-history.md, session 18).
-TriangleMesh CoarsestMesh(const RefineInput& input, const RefineOptions& options,
+TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& options,
                           const std::vector<PreparedView>& views,
                           const std::vector<std::pair<int, int>>& pairs, double gsd_m,
-                          const Progress& progress) {
-  TriangleMesh mesh = RemeshForLevel(input.initial_mesh, options, gsd_m, options.levels, progress);
-  if (options.levels != 0 || !options.remesh_coarse || !(options.initial_detail_gsd > 0))
+                          const Progress& progress, int level) {
+  TriangleMesh mesh = RemeshForLevel(
+      level == options.levels ? input.initial_mesh : InitialSurfaceAt(input, options, gsd_m, level),
+      options, gsd_m, level, progress);
+  if (level != 0 || !options.remesh_coarse || !(options.initial_detail_gsd > 0))
     return mesh;
   const double tolerance_m = options.initial_detail_gsd * gsd_m;
   std::vector<float> sigma = LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh);
@@ -155,12 +158,16 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 // Step 4: coarse to fine. Below the coarsest level, the previous level's result
 // (subdivided) competes with the initial surface: a DSM as sharp as the images loses
 // detail on the coarse levels that their iterations do not win back
-// (docs/benchmarks-history.md, Pléiades run 5).
+// (docs/benchmarks-history.md, Pléiades run 5). A carried start (carry_coarse_levels: a
+// mesh start) continues instead from the initial surface remeshed for the level and moved
+// as the coarser level moved it (CarryDisplacement): the coarse level corrects the start at
+// its scale, the start keeps its walls (stereo 0.5 m, the truth moved 1 m by smooth noise:
+// roofs 0.430 -> 0.313 m, the DSM start 0.349 m; docs/benchmarks-history.md, session 21).
 void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   const Progress& progress, const std::vector<PreparedView>& views,
                   RefineResult* result) {
   TriangleMesh mesh =
-      CoarsestMesh(input, options, views, result->pairs, result->gsd_m, progress);
+      LevelStartMesh(input, options, views, result->pairs, result->gsd_m, progress, options.levels);
   const LevelContext ctx{input,
                          options,
                          progress,
@@ -169,11 +176,20 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                          MeanRelativePairInformation(result->pair_details, options),
                          result->gsd_m};
   bool check_initial = options.restart_from_initial;
+  const bool carry = options.CarriesCoarseLevels(input.initial_is_mesh);
+  TriangleMesh reference;  // carry: the level's mesh before its iterations
   for (int level = options.levels; level >= 0; --level) {
     const auto level_start = StageClock::now();
     double initial_zncc = std::numeric_limits<double>::quiet_NaN(), check_s = 0;
     TriangleMesh initial;
-    if (level < options.levels) {
+    if (level < options.levels && carry) {
+      TriangleMesh fine =
+          LevelStartMesh(input, options, views, result->pairs, result->gsd_m, progress, level);
+      mesh = CarryDisplacement(reference, mesh, fine);
+      reference = std::move(fine);
+      spdlog::info("level {}: the initial surface remeshed ({} faces), moved as level {} moved it",
+                   level, mesh.num_faces(), level + 1);
+    } else if (level < options.levels) {
       const std::vector<char> subdivide =
           FacesToSubdivide(mesh, options.flat_tolerance_gsd * result->gsd_m * std::ldexp(1.0, level + 1));
       const size_t faces_before = mesh.num_faces();
@@ -183,6 +199,10 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                      std::count(subdivide.begin(), subdivide.end(), 1), faces_before,
                      faces_before, mesh.num_faces());
       SortSpatially(&mesh);
+    } else if (carry) {
+      reference = mesh;
+    }
+    if (level < options.levels) {
       if (check_initial) {
         const auto t0 = StageClock::now();
         initial = InitialSurfaceAt(input, options, result->gsd_m, level);
@@ -198,7 +218,8 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
       spdlog::info("level {}: the previous level's mean ZNCC {:.4f} does not beat the "
                    "initial surface's {:.4f} by {}; restarting from the initial surface",
                    level, stats.mean_zncc.front(), initial_zncc, kKeepMargin);
-      mesh = RemeshForLevel(std::move(initial), options, result->gsd_m, level, progress);
+      if (carry) mesh = reference;  // the initial surface remeshed for the level, unmoved
+      else mesh = RemeshForLevel(std::move(initial), options, result->gsd_m, level, progress);
       RefineLevel(ctx, level, std::numeric_limits<double>::quiet_NaN(), &mesh, &stats);
       restarted = true;
     } else if (!std::isnan(initial_zncc)) {
@@ -285,7 +306,7 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
   for (const auto& v : input.views) gsd_sum += GroundSamplingDistance(v.rpc, input.frame);
   result.gsd_m = gsd_sum / double(input.views.size());
   RefineOptions options = user_options;
-  options.levels = ResolveLevels(user_options, result.gsd_m, input.initial_cell_m);
+  options.levels = ResolveLevels(user_options, result.gsd_m, input.initial_cell_m, input.initial_is_mesh);
   if (user_options.levels < 0)
     spdlog::info("refine: {} coarser level(s): GSD {:.2f} m, initial surface cell {:.2f} m, "
                  "coarse edge {:.2f} m",

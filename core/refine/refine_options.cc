@@ -124,6 +124,11 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "other's (by the current surface and the suns in the images' metadata) is left out of "
        "that pair: moving shadows of a multi-date set are not matched; 1: on, 0: off, -1: on "
        "for a mesh start (a DSM's blurred walls cast wrong shadows)"},
+      {"carry_coarse_levels", &R::carry_coarse_levels, Range::In(-1, 1),
+       "below the coarsest level, start from the initial surface remeshed for the level and "
+       "moved as the coarser level moved it, not from the coarser level's result (the start's "
+       "walls and eaves kept, its error corrected at the coarse scale); 1: on, 0: off, -1: on "
+       "for a mesh start (a model the user trusts)"},
       {"hold_unseen", &R::hold_unseen, {},
        "vertices no pair-direction sees (occluded, grazing) do not move"},
       {"hold_boundary_xy", &R::hold_boundary_xy, {},
@@ -167,12 +172,17 @@ std::string RefineOptions::Check() const {
   return problem.empty() ? CheckPairAngles(pairs) : problem;
 }
 
-int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cell_m) {
+int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cell_m,
+                  bool initial_is_mesh) {
   if (options.levels >= 0) return options.levels;
   const double max_edge = std::max(options.max_coarse_edge_m, initial_cell_m);
+  const auto edge = [&](int level) { return options.coarse_edge_px * gsd_m * std::ldexp(1.0, level); };
   int level = 0;
-  while (level < 3 && options.coarse_edge_px * gsd_m * std::ldexp(1.0, level + 1) <= max_edge + 1e-9)
-    ++level;
+  while (level < 3 && edge(level + 1) <= max_edge + 1e-9) ++level;
+  // Carried coarse levels (CarriesCoarseLevels) keep no wall of their own: one coarser
+  // level is worth its cost up to twice the bound.
+  if (level == 0 && options.CarriesCoarseLevels(initial_is_mesh) && edge(1) <= 2 * max_edge + 1e-9)
+    level = 1;
   return level;
 }
 

@@ -69,7 +69,7 @@ struct RefineOptions {
                                      // than this many GSDs: faces of the coarse mesh the
                                      // initial surface departs from by more than that are
                                      // subdivided, their new vertices put on it
-                                     // (refine.cc, CoarsestMesh); 0: off
+                                     // (refine.cc, LevelStartMesh); 0: off
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous
@@ -128,6 +128,12 @@ struct RefineOptions {
                                    // shadows of a multi-date set; the suns from the images'
                                    // metadata; sunlight.h); 1: on, 0: off, -1: on for a mesh
                                    // start (a DSM's blurred walls cast wrong shadows)
+  int carry_coarse_levels = -1;    // below the coarsest level, start from the initial surface
+                                   // remeshed for the level and moved as the coarser level
+                                   // moved it (CarryDisplacement), not from the coarser
+                                   // level's result: coarse levels correct the start at their
+                                   // scale, the start's walls and eaves are kept; 1: on,
+                                   // 0: off, -1: on for a mesh start
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing
@@ -145,6 +151,10 @@ struct RefineOptions {
   // smooth_offsets resolved for a mesh start or a DSM start.
   bool SmoothsOffsets(bool initial_is_mesh) const {
     return smooth_offsets < 0 ? initial_is_mesh : smooth_offsets > 0;
+  }
+  // carry_coarse_levels resolved for a mesh start or a DSM start.
+  bool CarriesCoarseLevels(bool initial_is_mesh) const {
+    return carry_coarse_levels < 0 ? initial_is_mesh : carry_coarse_levels > 0;
   }
   // sunlit_pairs resolved for a mesh start or a DSM start.
   bool MatchesSunlitOnly(bool initial_is_mesh) const {
@@ -164,7 +174,10 @@ const RefineOptionInfo* FindRefineOption(std::string_view name);
 
 // The coarsest level: options.levels, or for -1 the largest L in [0, 3] whose coarse
 // triangle edge (coarse_edge_px x gsd_m x 2^L) is at most max(max_coarse_edge_m,
-// initial_cell_m) (initial_cell_m <= 0: unknown). 0.3 m and 0.5 m images: L = 1.
-int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cell_m);
+// initial_cell_m) (initial_cell_m <= 0: unknown): 0.3 m images L = 1, 0.503 m L = 0. Where
+// the levels are carried (CarriesCoarseLevels: a mesh start) and that gives 0, 1 if its
+// edge is at most twice the bound (0.5 m and 0.7 m images).
+int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cell_m,
+                  bool initial_is_mesh = false);
 
 }  // namespace satmesh

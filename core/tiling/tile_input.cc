@@ -58,8 +58,8 @@ PixelWindow ImageWindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vect
   return w;
 }
 
-int TileWindowMarginPx(const RefineOptions& options, double cell_m) {
-  return 8 + 4 * (1 << ResolveLevels(options, cell_m, cell_m));
+int TileWindowMarginPx(const RefineOptions& options, double cell_m, bool initial_is_mesh) {
+  return 8 + 4 * (1 << ResolveLevels(options, cell_m, cell_m, initial_is_mesh));
 }
 
 Dsm DownsampleDsm(const Dsm& dsm, int factor) {
@@ -108,7 +108,7 @@ void FrameAndViews(const JobSpec& spec, const std::string& crs, const Box2d& box
 
   // Window margin for the coarsest level's pixels (the GSD is not known yet: the grid's
   // cell stands in for it, as in CoarseCellSize).
-  const int margin_px = TileWindowMarginPx(spec.refine, cell_m);
+  const int margin_px = TileWindowMarginPx(spec.refine, cell_m, !spec.initial_mesh.path.empty());
   for (const auto& image : spec.images) {
     const RpcModel rpc = ReadRpc(image.path).WithBias(image.bias_col_row_px);
     const RasterInfo info = ReadRasterInfo(image.path);

@@ -34,8 +34,9 @@ PixelWindow ImageWindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vect
                               const RasterInfo& info, int margin_px);
 
 // Window margin for the coarsest level's pixels (the GSD is not known before the images
-// are read: the DSM's cell stands in for it, as in CoarseCellSize).
-int TileWindowMarginPx(const RefineOptions& options, double cell_m);
+// are read: the DSM's cell stands in for it, as in CoarseCellSize); initial_is_mesh: the
+// job starts from a mesh (ResolveLevels).
+int TileWindowMarginPx(const RefineOptions& options, double cell_m, bool initial_is_mesh);
 
 // Downsamples a DSM by an integer factor (NaN-aware block mean; a block with no valid
 // cell stays NaN).

@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 
+#include "core/common/error.h"
 #include "tests/core/mesh/mesh_fixtures.h"
 
 namespace satmesh {
@@ -189,6 +190,63 @@ TEST(FillHoles, FillsTheHolesUpToTheLimitOnTheSurfaceNotTheOuterBorder) {
   EXPECT_EQ(again.filled, 1u);
   EXPECT_EQ(again.too_big, 0u);
   EXPECT_NEAR(Area(points, faces), 900 * slope, 0.5);
+}
+
+// A coarse level's displacement (a linear field, so barycentric interpolation is exact)
+// carried onto a finer mesh of the same surface: flat parts move with it, a wall and a
+// roof the coarse mesh does not hold keep their place, a 45-degree plane moves by its
+// up-facing weight.
+TEST(CarryDisplacement, MovesWhatFacesUpAsTheCoarseLevelMovedIt) {
+  const TriangleMesh start = testing::CreateGridMesh(10, 4.f);  // 40 m square, z = 0
+  TriangleMesh end = start;
+  const auto field = [](const Eigen::Vector3f& p) {
+    return Eigen::Vector3f(0.2f, -0.1f, 0.5f + 0.01f * p.x());
+  };
+  for (auto& v : end.vertices) v += field(v);
+
+  TriangleMesh target = testing::CreateGridMesh(60, 0.5f);  // 30 m, flat
+  const size_t flat = target.vertices.size();
+  // A wall (x = 20 m, y 5-15 m, z 0-6 m) and a roof sloping at 45 degrees (x 2-6 m, y 20-24
+  // m, z = x - 2), each its own piece.
+  const auto quad = [&](Eigen::Vector3f a, Eigen::Vector3f b, Eigen::Vector3f c, Eigen::Vector3f d) {
+    const int i = int(target.vertices.size());
+    target.vertices.insert(target.vertices.end(), {a, b, c, d});
+    target.faces.emplace_back(i, i + 1, i + 2);
+    target.faces.emplace_back(i, i + 2, i + 3);
+  };
+  quad({20, 5, 0}, {20, 15, 0}, {20, 15, 6}, {20, 5, 6});
+  quad({2, 20, 0}, {6, 20, 4}, {6, 24, 4}, {2, 24, 0});
+  const TriangleMesh moved = CarryDisplacement(start, end, target);
+  ASSERT_EQ(moved.vertices.size(), target.vertices.size());
+  ASSERT_EQ(moved.faces, target.faces);
+  float worst_flat = 0;
+  for (size_t v = 0; v < flat; ++v)
+    worst_flat = std::max(worst_flat, (moved.vertices[v] - target.vertices[v] - field(target.vertices[v])).norm());
+  EXPECT_LT(worst_flat, 1e-4f);
+  for (size_t v = flat; v < flat + 4; ++v) EXPECT_EQ(moved.vertices[v], target.vertices[v]) << v;
+  // The roof is not the flat coarse surface below it (45 degrees apart): it stays too.
+  for (size_t v = flat + 4; v < flat + 8; ++v) EXPECT_EQ(moved.vertices[v], target.vertices[v]) << v;
+  // Tilted with the coarse mesh (the same surface), a 45-degree plane moves by its
+  // up-facing weight (0.707 - 0.5) / 0.3.
+  const Eigen::Matrix3f tilt = Eigen::AngleAxisf(float(M_PI / 4), Eigen::Vector3f::UnitY()).toRotationMatrix();
+  TriangleMesh tilted_start = start, tilted_end = end, tilted_target = testing::CreateGridMesh(20, 1.f);
+  for (auto* m : {&tilted_start, &tilted_end, &tilted_target})
+    for (auto& p : m->vertices) p = tilt * p;
+  const TriangleMesh tilted = CarryDisplacement(tilted_start, tilted_end, tilted_target);
+  const float w45 = (std::sqrt(0.5f) - 0.5f) / 0.3f;
+  float worst_tilted = 0;
+  for (size_t v = 0; v < tilted.vertices.size(); ++v) {
+    const Eigen::Vector3f expected = w45 * tilt * field(tilt.transpose() * tilted_target.vertices[v]);
+    worst_tilted = std::max(worst_tilted, (tilted.vertices[v] - tilted_target.vertices[v] - expected).norm());
+  }
+  EXPECT_LT(worst_tilted, 1e-4f);
+
+  TriangleMesh fewer = end;
+  fewer.vertices.pop_back();
+  EXPECT_THROW(CarryDisplacement(start, fewer, target), Error);
+  TriangleMesh no_faces = start;
+  no_faces.faces.clear();
+  EXPECT_THROW(CarryDisplacement(no_faces, no_faces, target), Error);
 }
 
 }  // namespace

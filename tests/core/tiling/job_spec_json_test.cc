@@ -119,6 +119,17 @@ TEST(ResolveLevels, CoarseEdgeStaysUnderTheBound) {
   EXPECT_EQ(ResolveLevels(o, 0.3, 2.0), 1);   // a 2 m DSM: the bound is its cell
   EXPECT_EQ(ResolveLevels(o, 0.3, 5.0), 3);   // a 5 m DSM: 4.8 m, capped at 3
   EXPECT_EQ(ResolveLevels(o, 0.1, 0.1), 3);
+  // A mesh start carries its coarse levels (carry_coarse_levels -1): one coarser level up
+  // to twice the bound, never more than a DSM start otherwise.
+  EXPECT_EQ(ResolveLevels(o, 0.503, 0.503), 0);        // 2.01 m at L = 1
+  EXPECT_EQ(ResolveLevels(o, 0.503, 0.503, true), 1);
+  EXPECT_EQ(ResolveLevels(o, 0.7, 0.5, true), 1);      // 2.8 m <= 4 m
+  EXPECT_EQ(ResolveLevels(o, 1.2, 1.0, true), 0);      // 4.8 m > 4 m
+  EXPECT_EQ(ResolveLevels(o, 0.3, 0.3, true), 1);      // as a DSM start
+  o.carry_coarse_levels = 0;
+  EXPECT_EQ(ResolveLevels(o, 0.7, 0.5, true), 0);
+  o.carry_coarse_levels = 1;
+  EXPECT_EQ(ResolveLevels(o, 0.7, 0.5, false), 1);
   o.levels = 2;
   EXPECT_EQ(ResolveLevels(o, 0.5, 0.5), 2);   // the user's choice stands
 }
