@@ -184,10 +184,12 @@ void SplitLongBlockBorders(double max_len, TriangleMesh* mesh, std::vector<int>*
 // neighbours projected onto its tangent plane (area-weighted normal); a move that turns a
 // face around it by 90 degrees or more, or makes one degenerate, is halved up to five times,
 // then dropped. CGAL 5.5's own (inside isotropic_remeshing) reads a null halfedge when every
-// face around a moved vertex is degenerate (a vertex of two faces back to back: a
-// tri-stereo building mesh remeshed at 2 m crashed), so it is off there and done here.
+// face around a moved vertex is degenerate (the true tri-stereo 0.5 m building mesh
+// remeshed at 2 m crashed), so it is off there and done here. movable: which vertices may
+// move (empty: all).
 template <typename ConstraintMap>
-void RelaxTangentially(ConstraintMap is_constrained, SurfaceMesh* sm) {
+void RelaxTangentially(ConstraintMap is_constrained, SurfaceMesh* sm,
+                       const std::function<bool(SurfaceMesh::Vertex_index)>& movable = {}) {
   using Vector = Eigen::Vector3d;
   const auto at = [&](SurfaceMesh::Vertex_index v) {
     const auto& p = sm->point(v);
@@ -201,7 +203,9 @@ void RelaxTangentially(ConstraintMap is_constrained, SurfaceMesh* sm) {
   };
   std::vector<std::pair<SurfaceMesh::Vertex_index, Vector>> moves;
   for (auto v : sm->vertices()) {
-    if (sm->is_isolated(v) || sm->is_border(v, /*check_all_incident_halfedges=*/true)) continue;
+    if (sm->is_isolated(v) || sm->is_border(v, /*check_all_incident_halfedges=*/true) ||
+        (movable && !movable(v)))
+      continue;
     Vector centre = Vector::Zero(), normal = Vector::Zero();
     int n = 0;
     bool free = true;
@@ -286,8 +290,7 @@ struct BlockResult {
 };
 
 BlockResult RemeshBlock(const TriangleMesh& mesh, const std::vector<int>& face_ids,
-                        const CoarseMeshOptions& options, const std::function<bool()>& cancelled,
-                        bool remesh = true) {
+                        const CoarseMeshOptions& options, const std::function<bool()>& cancelled) {
   BlockResult out;
   std::unordered_map<int, SurfaceMesh::Vertex_index> local;
   auto g = out.sm.add_property_map<SurfaceMesh::Vertex_index, int>("v:global", -1).first;
@@ -306,13 +309,13 @@ BlockResult RemeshBlock(const TriangleMesh& mesh, const std::vector<int>& face_i
     if (out.sm.add_face(a, b, c) == SurfaceMesh::null_face()) out.kept.push_back(t);
   }
   DropIsolatedVertices(&out.sm);
-  if (remesh && out.sm.number_of_faces() > 0)
+  if (out.sm.number_of_faces() > 0)
     RemeshInPlace(options, ConstrainBorder(&out.sm), /*protect=*/true, cancelled, &out.sm);
   out.sm.collect_garbage();
   out.global.assign(out.sm.number_of_vertices(), -1);
   // Interior input vertices were moved: only the (protected) border's are shared.
   for (auto v : out.sm.vertices())
-    if (!remesh || out.sm.is_border(v)) out.global[uint32_t(v)] = g[v];
+    if (out.sm.is_border(v)) out.global[uint32_t(v)] = g[v];
   return out;
 }
 
@@ -422,22 +425,30 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
     if (in_band[uint32_t(f)]) band.push_back(f);
   const auto is_constrained = ConstrainBorder(&sm);
   spdlog::debug("remesh: {} blocks, band of {} faces", num_blocks, band.size());
-  // The band in one call: its face range does not survive an iteration.
-  // The band remeshed as one more block, its border (where it meets the blocks' remeshed
-  // insides) kept. Not as a face range of the whole: CGAL 5.5's remeshing of a face range
-  // within a larger mesh crashed in its tangential relaxation on a building mesh at 2 m
-  // edges (tri-stereo 0.5 m, the true mesh), a whole patch does not.
-  if (!band.empty()) {
-    const TriangleMesh whole = FromSurfaceMesh(sm, mesh);  // vertex and face i: sm's i
-    std::vector<int> band_ids(band.size());
-    for (size_t k = 0; k < band.size(); ++k) band_ids[k] = int(uint32_t(band[k]));
-    std::vector<BlockResult> parts(2);
-    parts[0] = RemeshBlock(whole, band_ids, options, cancelled, /*remesh=*/true);
-    std::vector<int> rest;
-    for (size_t f = 0; f < whole.faces.size(); ++f)
-      if (!in_band[f]) rest.push_back(int(f));
-    parts[1] = RemeshBlock(whole, rest, options, cancelled, /*remesh=*/false);
-    sm = StitchBlocks(whole, &parts);
+  // The band, one iteration at a time (its face range does not survive one): then the
+  // faces with a vertex off the blocks' remeshed insides (a vertex CGAL makes is).
+  auto inside = sm.add_property_map<SurfaceMesh::Vertex_index, bool>("v:inside", false).first;
+  for (auto f : sm.faces())
+    if (!in_band[uint32_t(f)])
+      for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) inside[v] = true;
+  for (int it = 0; it < options.iterations && !band.empty(); ++it) {
+    progress.ThrowIfCancelled();
+    if (it > 0) {
+      band.clear();
+      for (auto f : sm.faces())
+        for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm))
+          if (!inside[v]) {
+            band.push_back(f);
+            break;
+          }
+    }
+    PMP::isotropic_remeshing(band, options.target_edge_m, sm,
+                             PMP::parameters::number_of_iterations(1)
+                                 .number_of_relaxation_steps(0)
+                                 .edge_is_constrained_map(is_constrained)
+                                 .protect_constraints(false)
+                                 .relax_constraints(false));
+    RelaxTangentially(is_constrained, &sm, [&](SurfaceMesh::Vertex_index v) { return !inside[v]; });
   }
   progress.ThrowIfCancelled();
   return sm;

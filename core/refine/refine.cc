@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "core/common/error.h"
 #include "core/common/stage_time.h"
@@ -29,6 +30,9 @@ namespace {
 // at full resolution, is kept (docs/benchmarks-history.md, session 7: on Pléiades the
 // coarse levels of a narrow pair drift by 0.5 m where they tie with s2p's DSM).
 constexpr double kKeepMargin = 0.001;
+// A mesh start's extra coarser level (ResolveLevels, carried) is kept only where the
+// full-resolution images leave the median vertex's height uncertain beyond this (GSD).
+constexpr double kCarriedLevelSigmaGsd = 0.5;
 
 // Once a level's result beats the initial surface by more than this, the finer levels
 // no longer measure the initial surface (one photometric pass over a mesh with twice the
@@ -85,11 +89,13 @@ TriangleMesh InitialSurfaceAt(const RefineInput& input, const RefineOptions& opt
 // where it cannot hold the initial surface's detail (FollowInitialDetail): the iterations
 // at one level do not win back what the 2-pixel mesh smooths away (synthetic 0.7 m stereo
 // and tri-stereo, F-score @0.5 m 2-3 points higher; multi-date views resolve it and lose
-// 1 point of facades with it; docs/benchmarks-history.md, session 18).
+// 1 point of facades with it; docs/benchmarks-history.md, session 18). median_sigma_m: that
+// median (NaN where the test did not run).
 TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& options,
                           const std::vector<PreparedView>& views,
                           const std::vector<std::pair<int, int>>& pairs, double gsd_m,
-                          const Progress& progress, int level) {
+                          const Progress& progress, int level, double* median_sigma_m = nullptr) {
+  if (median_sigma_m) *median_sigma_m = std::numeric_limits<double>::quiet_NaN();
   TriangleMesh mesh = RemeshForLevel(
       level == options.levels ? input.initial_mesh : InitialSurfaceAt(input, options, gsd_m, level),
       options, gsd_m, level, progress);
@@ -99,6 +105,7 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
   std::vector<float> sigma = LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh);
   const auto middle = sigma.begin() + long(sigma.size() / 2);
   std::nth_element(sigma.begin(), middle, sigma.end());  // +inf (unseen) sorts last
+  if (median_sigma_m && !sigma.empty()) *median_sigma_m = *middle;
   if (sigma.empty() || !(*middle > tolerance_m)) {
     spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex), within "
                  "{:.2f} m: the coarse mesh is kept at {} pixels",
@@ -165,9 +172,12 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 // roofs 0.430 -> 0.313 m, the DSM start 0.349 m; docs/benchmarks-history.md, session 21).
 void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   const Progress& progress, const std::vector<PreparedView>& views,
-                  RefineResult* result) {
+                  RefineResult* result, std::optional<TriangleMesh> level0_start) {
+  // level0_start: LevelStartMesh at level 0, made already.
   TriangleMesh mesh =
-      LevelStartMesh(input, options, views, result->pairs, result->gsd_m, progress, options.levels);
+      options.levels == 0 && level0_start
+          ? std::move(*level0_start)
+          : LevelStartMesh(input, options, views, result->pairs, result->gsd_m, progress, options.levels);
   const LevelContext ctx{input,
                          options,
                          progress,
@@ -184,7 +194,9 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
     TriangleMesh initial;
     if (level < options.levels && carry) {
       TriangleMesh fine =
-          LevelStartMesh(input, options, views, result->pairs, result->gsd_m, progress, level);
+          level == 0 && level0_start
+              ? std::move(*level0_start)
+              : LevelStartMesh(input, options, views, result->pairs, result->gsd_m, progress, level);
       mesh = CarryDisplacement(reference, mesh, fine);
       reference = std::move(fine);
       spdlog::info("level {}: the initial surface remeshed ({} faces), moved as level {} moved it",
@@ -330,8 +342,28 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
   // 3. Per-view RPC biases.
   if (options.estimate_bias) EstimateBiases(input, selection, options, progress, &views, &result);
 
-  // 4. Coarse to fine.
-  CoarseToFine(input, options, progress, views, &result);
+  // 4. Coarse to fine. The coarser level a carried start gets beyond a DSM start's
+  //    (ResolveLevels) is dropped again where the full-resolution images determine the
+  //    median vertex's height to within kCarriedLevelSigmaGsd (a multi-date set): level 0
+  //    alone corrects the start there, and the coarse level's windows lifted the ground of
+  //    courtyards and narrow streets (multi-date 0.5 m s1, perturbed: F 76.4 -> 72.9;
+  //    docs/benchmarks-history.md, session 21), while a stereo or tri-stereo pass (1.5-3.7
+  //    GSD) corrects a smooth error only with it.
+  std::optional<TriangleMesh> level0_start;
+  if (user_options.levels < 0 && options.levels == 1 &&
+      options.CarriesCoarseLevels(input.initial_is_mesh) &&
+      ResolveLevels(user_options, result.gsd_m, input.initial_cell_m, false) == 0) {
+    double median_sigma_m = 0;
+    level0_start =
+        LevelStartMesh(input, options, views, result.pairs, result.gsd_m, progress, 0, &median_sigma_m);
+    if (median_sigma_m <= kCarriedLevelSigmaGsd * result.gsd_m) {
+      options.levels = 0;
+      spdlog::info("refine: no coarser level after all: the images determine the median "
+                   "vertex's height to {:.2f} m (within {} GSD)",
+                   median_sigma_m, kCarriedLevelSigmaGsd);
+    }
+  }
+  CoarseToFine(input, options, progress, views, &result, std::move(level0_start));
 
   // 5. The initial surface kept where the images do not contradict it beyond their noise.
   KeepInitialWithinNoise(input, options, &result);

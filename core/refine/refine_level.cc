@@ -115,7 +115,7 @@ std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
 double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& sources,
                    const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
                    double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize,
-                   std::vector<double>* information = nullptr) {
+                   std::vector<double>* information = nullptr, bool sunlit = false) {
   std::vector<int> slot;
   std::vector<ViewLevel> views =
       MakeViewLevels(input, sources, pairs, mesh, level, options.virtual_camera_grid_px, &slot);
@@ -127,11 +127,21 @@ double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& so
     const RayScene scene(mesh);
     for (auto& v : views) CastHitMap(scene, &v, &normals);
   }
+  PhotometricOptions photo = PhotometricOptionsAt(options, level_gsd_m, MeanNoiseVariance(sources, level));
+  // sunlit: moving shadows left out as the level's iterations leave them out (sunlit_pairs),
+  // so that a ZNCC measured here compares with theirs.
+  if (sunlit && options.MatchesSunlitOnly(input.initial_is_mesh)) {
+    std::vector<Eigen::Vector3f> suns;
+    for (const RefineView& v : input.views) suns.push_back(SunDirection(v.acquisition));
+    if (!std::all_of(suns.begin(), suns.end(), [](const auto& d) { return d.squaredNorm() == 0; })) {
+      MarkSunlight(mesh, normals, suns, pairs, &views);
+      photo.sunlit_only = true;
+    }
+  }
   std::vector<PassScratch> scratch;
   if (information) information->assign(mesh.num_vertices(), 0.0);
-  return PhotometricPass(views, slot, pairs, mesh, normals,
-                         PhotometricOptionsAt(options, level_gsd_m, MeanNoiseVariance(sources, level)),
-                         &scratch, nullptr, nullptr, /*one_direction=*/-1, information);
+  return PhotometricPass(views, slot, pairs, mesh, normals, photo, &scratch, nullptr, nullptr,
+                         /*one_direction=*/-1, information);
 }
 
 }  // namespace
@@ -139,7 +149,8 @@ double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& so
 double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sources,
                  const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
                  double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize) {
-  return MeasurePass(input, sources, pairs, options, level_gsd_m, level, mesh, rasterize);
+  return MeasurePass(input, sources, pairs, options, level_gsd_m, level, mesh, rasterize,
+                     nullptr, /*sunlit=*/true);
 }
 
 std::vector<float> LevelHeightSigma(const RefineInput& input,

@@ -28,7 +28,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
                  LevelStats* stats_out);
 
 // Mean ZNCC of `mesh` over `pairs` at `level`, without changing anything; hit maps
-// rasterized or cast with Embree.
+// rasterized or cast with Embree; moving shadows left out as RefineLevel leaves them out
+// (sunlit_pairs), so the two compare.
 double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sources,
                  const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
                  double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize);
