@@ -179,16 +179,46 @@ void SplitLongBlockBorders(double max_len, TriangleMesh* mesh, std::vector<int>*
   }
 }
 
+using Triangle = Kernel::Triangle_3;
+using TrianglePrimitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle>::const_iterator>;
+using TriangleTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, TrianglePrimitive>>;
+
+// The closest point on a surface: the input of a remeshing, which its vertices are put
+// back on after they moved (as CGAL's remeshing projects them).
+class SurfaceProjector {
+ public:
+  explicit SurfaceProjector(const SurfaceMesh& sm) {
+    for (auto f : sm.faces()) {
+      std::array<Kernel::Point_3, 3> q;
+      int k = 0;
+      for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) q[k++] = sm.point(v);
+      const Triangle t(q[0], q[1], q[2]);
+      if (!t.is_degenerate()) triangles_.push_back(t);
+    }
+    if (!triangles_.empty()) {
+      tree_.rebuild(triangles_.cbegin(), triangles_.cend());
+      tree_.accelerate_distance_queries();
+    }
+  }
+  Kernel::Point_3 Closest(const Kernel::Point_3& p) const {
+    return triangles_.empty() ? p : tree_.closest_point(p);
+  }
+
+ private:
+  std::vector<Triangle> triangles_;
+  TriangleTree tree_;
+};
+
 // The tangential relaxation of isotropic remeshing (Botsch and Kobbelt): each vertex inside
-// the surface (no border or constrained edge at it) whose faces are near one plane moves to the barycentre of its
+// the surface (no border or constrained edge at it) moves to the barycentre of its
 // neighbours projected onto its tangent plane (area-weighted normal); a move that turns a
 // face around it by 90 degrees or more, or makes one degenerate, is halved up to five times,
-// then dropped. CGAL 5.5's own (inside isotropic_remeshing) reads a null halfedge when every
-// face around a moved vertex is degenerate (the true tri-stereo 0.5 m building mesh
-// remeshed at 2 m crashed), so it is off there and done here. movable: which vertices may
-// move (empty: all).
+// then dropped; the moved vertices are then put on `surface` (the closest point). CGAL
+// 5.5's own (inside isotropic_remeshing) reads a null halfedge when every face around a
+// moved vertex is degenerate (the true tri-stereo 0.5 m building mesh remeshed at 2 m
+// crashed), so it is off there and done here. movable: which vertices may move (empty: all).
 template <typename ConstraintMap>
-void RelaxTangentially(ConstraintMap is_constrained, SurfaceMesh* sm,
+void RelaxTangentially(ConstraintMap is_constrained, const SurfaceProjector& surface, SurfaceMesh* sm,
                        const std::function<bool(SurfaceMesh::Vertex_index)>& movable = {}) {
   using Vector = Eigen::Vector3d;
   const auto at = [&](SurfaceMesh::Vertex_index v) {
@@ -221,22 +251,10 @@ void RelaxTangentially(ConstraintMap is_constrained, SurfaceMesh* sm,
     if (!free || n < 3 || !(normal.squaredNorm() > 0)) continue;
     centre /= n;
     normal.normalize();
-    // Only where the faces around are near one plane (within 20 degrees): a move in the
-    // tangent plane stays on the surface (CGAL projects back onto the input; not done here,
-    // so creases are not rounded off).
-    bool planar = true;
-    for (auto f : CGAL::faces_around_target(sm->halfedge(v), *sm)) {
-      if (f == SurfaceMesh::null_face()) continue;
-      const Vector nf = face_normal(f);
-      if (!(nf.dot(normal) > 0.94 * nf.norm())) {
-        planar = false;
-        break;
-      }
-    }
-    if (!planar) continue;
     const Vector p = at(v);
     moves.emplace_back(v, centre + (p - centre).dot(normal) * normal);
   }
+  std::vector<SurfaceMesh::Vertex_index> moved;
   for (const auto& [v, target] : moves) {
     const Vector from = at(v);
     std::vector<std::pair<SurfaceMesh::Face_index, Vector>> before;
@@ -255,9 +273,13 @@ void RelaxTangentially(ConstraintMap is_constrained, SurfaceMesh* sm,
           break;
         }
       }
-      if (ok) break;
+      if (ok) {
+        moved.push_back(v);
+        break;
+      }
     }
   }
+  for (auto v : moved) sm->point(v) = surface.Closest(sm->point(v));
 }
 
 // CGAL's isotropic remeshing of all of `sm`, iterations one at a time (cancellation
@@ -267,6 +289,7 @@ void RelaxTangentially(ConstraintMap is_constrained, SurfaceMesh* sm,
 template <typename ConstraintMap>
 void RemeshInPlace(const CoarseMeshOptions& options, ConstraintMap is_constrained, bool protect,
                    const std::function<bool()>& cancelled, SurfaceMesh* sm) {
+  const SurfaceProjector input(*sm);
   for (int it = 0; it < options.iterations; ++it) {
     if (cancelled()) return;
     PMP::isotropic_remeshing(faces(*sm), options.target_edge_m, *sm,
@@ -275,7 +298,7 @@ void RemeshInPlace(const CoarseMeshOptions& options, ConstraintMap is_constraine
                                  .edge_is_constrained_map(is_constrained)
                                  .protect_constraints(protect)
                                  .relax_constraints(false));
-    RelaxTangentially(is_constrained, sm);
+    RelaxTangentially(is_constrained, input, sm);
   }
 }
 
@@ -431,6 +454,7 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
   for (auto f : sm.faces())
     if (!in_band[uint32_t(f)])
       for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) inside[v] = true;
+  const SurfaceProjector input(sm);
   for (int it = 0; it < options.iterations && !band.empty(); ++it) {
     progress.ThrowIfCancelled();
     if (it > 0) {
@@ -448,7 +472,8 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
                                  .edge_is_constrained_map(is_constrained)
                                  .protect_constraints(false)
                                  .relax_constraints(false));
-    RelaxTangentially(is_constrained, &sm, [&](SurfaceMesh::Vertex_index v) { return !inside[v]; });
+    RelaxTangentially(is_constrained, input, &sm,
+                      [&](SurfaceMesh::Vertex_index v) { return !inside[v]; });
   }
   progress.ThrowIfCancelled();
   return sm;
@@ -608,9 +633,6 @@ TriangleMesh CarryDisplacement(const TriangleMesh& start, const TriangleMesh& en
                     std::to_string(start.num_vertices()) + " vs " +
                     std::to_string(end.num_vertices()) + " vertices, " +
                     std::to_string(start.num_faces()) + " faces)");
-  using Triangle = Kernel::Triangle_3;
-  using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle>::const_iterator>;
-  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
   const auto point = [&](int v) {
     const Eigen::Vector3f& p = start.vertices[size_t(v)];
     return Kernel::Point_3(p.x(), p.y(), p.z());
@@ -627,7 +649,7 @@ TriangleMesh CarryDisplacement(const TriangleMesh& start, const TriangleMesh& en
   }
   SATMESH_CHECK(!triangles.empty(), ErrorCode::kInvalidArgument,
                 "CarryDisplacement: start has only degenerate faces");
-  Tree tree(triangles.cbegin(), triangles.cend());
+  TriangleTree tree(triangles.cbegin(), triangles.cend());
   tree.accelerate_distance_queries();
   const Eigen::Vector3d offset = target.origin - start.origin;
   const std::vector<Eigen::Vector3f> normals = VertexNormals(target);
