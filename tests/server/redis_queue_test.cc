@@ -58,9 +58,11 @@ TEST_F(RedisQueue, MultiTileJobMatchesTheSingleProcessRun) {
   EXPECT_EQ(served["seams_total"]["cells"], expected["seams_total"]["cells"]);
   for (const char* key : {"median_abs_m", "p95_abs_m", "max_abs_m", "mean_m"})
     EXPECT_NEAR(served["seams_total"][key].get<double>(), expected["seams_total"][key].get<double>(), 1e-3) << key;
-  // The assembled mesh: the same faces, vertices within 5 mm (1/60 GSD): a worker runs
+  // The assembled mesh: the same faces, vertices within 1 cm (1/30 GSD): a worker runs
   // one thread, the in-process run two, so the per-vertex sums are added in another order,
-  // and float rounding grows over the iterations (CI measured 2.0 mm on this 16-tile job).
+  // and float rounding grows over the iterations (CI measured 2.0 mm on this 16-tile job;
+  // session 21, with the remeshing's own relaxation: 0.04 mm in some runs, 5.38 mm in
+  // others, where a pixel's hit face flips between the two orders and its vertex follows).
   std::ofstream(dir_ + "/served.ply", std::ios::binary) << c.Get(("/jobs/" + id + "/results/mesh.ply").c_str())->body;
   const TriangleMesh a = ReadMesh(dir_ + "/served.ply"), b = ReadMesh(local.mesh_path);
   ASSERT_EQ(a.faces, b.faces);
@@ -68,9 +70,10 @@ TEST_F(RedisQueue, MultiTileJobMatchesTheSingleProcessRun) {
   double max_diff = 0;
   for (size_t v = 0; v < a.vertices.size(); ++v)
     max_diff = std::max(max_diff, (a.AbsoluteVertex(v) - b.AbsoluteVertex(v)).cwiseAbs().maxCoeff());
-  EXPECT_LT(max_diff, 5e-3);
-  std::printf("[ redis ] 16 tiles, 2 API nodes, 3 workers: submit->successful %.1f s; in-process (1 worker) %.1f s\n", queued_s,
-              local_s);
+  EXPECT_LT(max_diff, 1e-2);
+  std::printf("[ redis ] 16 tiles, 2 API nodes, 3 workers: submit->successful %.1f s; in-process (1 worker) %.1f s; "
+              "largest vertex difference %.2f mm\n",
+              queued_s, local_s, 1e3 * max_diff);
 }
 
 TEST_F(RedisQueue, CancellingThroughAnotherApiNodeStopsTheTiles) {
