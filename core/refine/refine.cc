@@ -169,7 +169,7 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 // mesh start) continues instead from the initial surface remeshed for the level and moved
 // as the coarser level moved it (CarryDisplacement): the coarse level corrects the start at
 // its scale, the start keeps its walls (stereo 0.5 m, the truth moved 1 m by smooth noise:
-// roofs 0.430 -> 0.313 m, the DSM start 0.349 m; docs/benchmarks-history.md, session 21).
+// roofs 0.430 -> 0.323 m, the DSM start 0.350 m; docs/benchmarks-history.md, session 21).
 void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   const Progress& progress, const std::vector<PreparedView>& views,
                   RefineResult* result, std::optional<TriangleMesh> level0_start) {
