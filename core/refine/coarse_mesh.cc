@@ -1,13 +1,7 @@
 #include "core/refine/coarse_mesh.h"
 
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
-#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
-#include <CGAL/Surface_mesh.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -18,13 +12,15 @@
 #include <unordered_map>
 
 #include "core/common/error.h"
-#include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
+#include "core/refine/cgal_surface.h"
 
 namespace satmesh {
 namespace {
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using SurfaceMesh = CGAL::Surface_mesh<Kernel::Point_3>;
+using cgal_surface::Kernel;
+using cgal_surface::RelaxTangentially;
+using cgal_surface::SurfaceMesh;
+using cgal_surface::SurfaceProjector;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
 // Removes the vertices no face uses and compacts the mesh (property maps are kept).
@@ -177,109 +173,6 @@ void SplitLongBlockBorders(double max_len, TriangleMesh* mesh, std::vector<int>*
     for (uint64_t k : {EdgeKey(a, m), EdgeKey(m, b)})
       if (is_long_border(k, edge_faces[k])) queue.push_back(k);
   }
-}
-
-using Triangle = Kernel::Triangle_3;
-using TrianglePrimitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle>::const_iterator>;
-using TriangleTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, TrianglePrimitive>>;
-
-// The closest point on a surface: the input of a remeshing, which its vertices are put
-// back on after they moved (as CGAL's remeshing projects them).
-class SurfaceProjector {
- public:
-  explicit SurfaceProjector(const SurfaceMesh& sm) {
-    for (auto f : sm.faces()) {
-      std::array<Kernel::Point_3, 3> q;
-      int k = 0;
-      for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) q[k++] = sm.point(v);
-      const Triangle t(q[0], q[1], q[2]);
-      if (!t.is_degenerate()) triangles_.push_back(t);
-    }
-    if (!triangles_.empty()) {
-      tree_.rebuild(triangles_.cbegin(), triangles_.cend());
-      tree_.accelerate_distance_queries();
-    }
-  }
-  Kernel::Point_3 Closest(const Kernel::Point_3& p) const {
-    return triangles_.empty() ? p : tree_.closest_point(p);
-  }
-
- private:
-  std::vector<Triangle> triangles_;
-  TriangleTree tree_;
-};
-
-// The tangential relaxation of isotropic remeshing (Botsch and Kobbelt): each vertex inside
-// the surface (no border or constrained edge at it) moves to the barycentre of its
-// neighbours projected onto its tangent plane (area-weighted normal); a move that turns a
-// face around it by 90 degrees or more, or makes one degenerate, is halved up to five times,
-// then dropped; the moved vertices are then put on `surface` (the closest point). CGAL
-// 5.5's own (inside isotropic_remeshing) reads a null halfedge when every face around a
-// moved vertex is degenerate (the true tri-stereo 0.5 m building mesh remeshed at 2 m
-// crashed), so it is off there and done here. movable: which vertices may move (empty: all).
-template <typename ConstraintMap>
-void RelaxTangentially(ConstraintMap is_constrained, const SurfaceProjector& surface, SurfaceMesh* sm,
-                       const std::function<bool(SurfaceMesh::Vertex_index)>& movable = {}) {
-  using Vector = Eigen::Vector3d;
-  const auto at = [&](SurfaceMesh::Vertex_index v) {
-    const auto& p = sm->point(v);
-    return Vector(p.x(), p.y(), p.z());
-  };
-  const auto face_normal = [&](SurfaceMesh::Face_index f) {  // not normalised (2 x area)
-    std::array<Vector, 3> q;
-    int k = 0;
-    for (auto w : CGAL::vertices_around_face(sm->halfedge(f), *sm)) q[k++] = at(w);
-    return Vector((q[1] - q[0]).cross(q[2] - q[0]));
-  };
-  std::vector<std::pair<SurfaceMesh::Vertex_index, Vector>> moves;
-  for (auto v : sm->vertices()) {
-    if (sm->is_isolated(v) || sm->is_border(v, /*check_all_incident_halfedges=*/true) ||
-        (movable && !movable(v)))
-      continue;
-    Vector centre = Vector::Zero(), normal = Vector::Zero();
-    int n = 0;
-    bool free = true;
-    for (auto h : CGAL::halfedges_around_target(sm->halfedge(v), *sm)) {
-      if (is_constrained[sm->edge(h)]) {
-        free = false;
-        break;
-      }
-      centre += at(sm->source(h));
-      ++n;
-      if (!sm->is_border(h)) normal += face_normal(sm->face(h));
-    }
-    if (!free || n < 3 || !(normal.squaredNorm() > 0)) continue;
-    centre /= n;
-    normal.normalize();
-    const Vector p = at(v);
-    moves.emplace_back(v, centre + (p - centre).dot(normal) * normal);
-  }
-  std::vector<SurfaceMesh::Vertex_index> moved;
-  for (const auto& [v, target] : moves) {
-    const Vector from = at(v);
-    std::vector<std::pair<SurfaceMesh::Face_index, Vector>> before;
-    for (auto f : CGAL::faces_around_target(sm->halfedge(v), *sm))
-      if (f != SurfaceMesh::null_face()) before.emplace_back(f, face_normal(f));
-    double frac = 1;
-    for (int attempt = 0; attempt <= 5; ++attempt, frac *= 0.5) {
-      const Vector q = attempt == 5 ? from : Vector(from + frac * (target - from));
-      sm->point(v) = Kernel::Point_3(q.x(), q.y(), q.z());
-      if (attempt == 5) break;
-      bool ok = true;
-      for (const auto& [f, n0] : before) {
-        const Vector n1 = face_normal(f);
-        if (!(n1.squaredNorm() > 1e-12 * n0.squaredNorm()) || !(n1.dot(n0) > 0)) {
-          ok = false;
-          break;
-        }
-      }
-      if (ok) {
-        moved.push_back(v);
-        break;
-      }
-    }
-  }
-  for (auto v : moved) sm->point(v) = surface.Closest(sm->point(v));
 }
 
 // CGAL's isotropic remeshing of all of `sm`, iterations one at a time (cancellation
@@ -539,155 +432,6 @@ void SortSpatially(TriangleMesh* mesh) {
   // Faces in the order of their smallest vertex (orientation kept).
   std::sort(mesh->faces.begin(), mesh->faces.end(),
             [](const Eigen::Vector3i& a, const Eigen::Vector3i& b) { return a.minCoeff() < b.minCoeff(); });
-}
-
-HoleFill FillHoles(double max_extent_m, std::vector<Eigen::Vector3d>* points,
-                   std::vector<Eigen::Vector3i>* faces) {
-  HoleFill out;
-  SurfaceMesh sm;
-  for (const auto& p : *points) sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
-  std::vector<Eigen::Vector3i> kept;  // faces CGAL cannot take, kept as they are
-  for (const auto& f : *faces)
-    if (sm.add_face(SurfaceMesh::Vertex_index(f[0]), SurfaceMesh::Vertex_index(f[1]),
-                    SurfaceMesh::Vertex_index(f[2])) == SurfaceMesh::null_face())
-      kept.push_back(f);
-  std::vector<SurfaceMesh::Halfedge_index> cycles;
-  PMP::extract_boundary_cycles(sm, std::back_inserter(cycles));
-  // A hole something covers from above (the ground's cut-out under a building whose walls
-  // do not share its vertices) is no gap: what the images see is there. The test: a ray
-  // up from the border's centroid, above its highest point, hits the mesh.
-  std::vector<SurfaceMesh::Halfedge_index> holes;
-  std::vector<Ray> up;
-  const Eigen::Vector3d origin =  // float coordinates about it for Embree
-      points->empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(points->front().array().round());
-  for (const auto h0 : cycles) {
-    // Shoelace area (x, y) and box of the cycle.
-    double area2 = 0, xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
-    for (const auto h : CGAL::halfedges_around_face(h0, sm)) {
-      const auto& a = sm.point(sm.source(h));
-      const auto& b = sm.point(sm.target(h));
-      area2 += a.x() * b.y() - b.x() * a.y();
-      xmin = std::min(xmin, a.x()), xmax = std::max(xmax, a.x());
-      ymin = std::min(ymin, a.y()), ymax = std::max(ymax, a.y());
-    }
-    if (!(area2 > 0)) continue;  // an outer border
-    if (std::hypot(xmax - xmin, ymax - ymin) > max_extent_m) {
-      ++out.too_big;
-      continue;
-    }
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    double zmax = -1e300;
-    int n = 0;
-    for (const auto v : CGAL::vertices_around_face(h0, sm)) {
-      const auto& p = sm.point(v);
-      centroid += Eigen::Vector3d(p.x(), p.y(), p.z()), ++n;
-      zmax = std::max(zmax, p.z());
-    }
-    centroid /= double(n);
-    holes.push_back(h0);
-    const Eigen::Vector3d start(centroid.x(), centroid.y(), zmax + 0.1);
-    up.push_back(Ray{(start - origin).cast<float>(), Eigen::Vector3f::UnitZ()});
-  }
-  std::vector<RayHit> hits(up.size());
-  if (!up.empty()) {
-    TriangleMesh frame;
-    frame.faces = *faces;
-    for (const auto& p : *points) frame.vertices.push_back((p - origin).cast<float>());
-    RayScene(frame).Intersect(up.data(), hits.data(), up.size());
-  }
-  for (size_t i = 0; i < holes.size(); ++i) {
-    if (hits[i].hit()) {
-      ++out.covered;
-      continue;
-    }
-    const auto h0 = holes[i];
-    std::vector<SurfaceMesh::Face_index> new_faces;
-    std::vector<SurfaceMesh::Vertex_index> new_vertices;
-    PMP::triangulate_refine_and_fair_hole(sm, h0, std::back_inserter(new_faces),
-                                          std::back_inserter(new_vertices));
-    if (!new_faces.empty()) ++out.filled, out.faces_added += new_faces.size();
-  }
-  if (out.filled == 0) return out;
-  // Vertices keep their indices (nothing was removed); new ones follow.
-  points->resize(sm.number_of_vertices());
-  for (auto v : sm.vertices()) {
-    const auto& p = sm.point(v);
-    (*points)[uint32_t(v)] = Eigen::Vector3d(p.x(), p.y(), p.z());
-  }
-  faces->clear();
-  for (auto f : sm.faces()) {
-    Eigen::Vector3i tri;
-    int k = 0;
-    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) tri[k++] = int(uint32_t(v));
-    faces->push_back(tri);
-  }
-  faces->insert(faces->end(), kept.begin(), kept.end());
-  return out;
-}
-
-TriangleMesh CarryDisplacement(const TriangleMesh& start, const TriangleMesh& end,
-                               TriangleMesh target) {
-  SATMESH_CHECK(start.num_vertices() == end.num_vertices() && start.num_faces() > 0,
-                ErrorCode::kInvalidArgument,
-                "CarryDisplacement: start and end must be one mesh with faces (" +
-                    std::to_string(start.num_vertices()) + " vs " +
-                    std::to_string(end.num_vertices()) + " vertices, " +
-                    std::to_string(start.num_faces()) + " faces)");
-  const auto point = [&](int v) {
-    const Eigen::Vector3f& p = start.vertices[size_t(v)];
-    return Kernel::Point_3(p.x(), p.y(), p.z());
-  };
-  std::vector<Triangle> triangles;
-  triangles.reserve(start.num_faces());
-  std::vector<size_t> face_of;  // non-degenerate triangles only
-  for (size_t f = 0; f < start.num_faces(); ++f) {
-    const Eigen::Vector3i& t = start.faces[f];
-    Triangle tri(point(t[0]), point(t[1]), point(t[2]));
-    if (tri.is_degenerate()) continue;
-    triangles.push_back(tri);
-    face_of.push_back(f);
-  }
-  SATMESH_CHECK(!triangles.empty(), ErrorCode::kInvalidArgument,
-                "CarryDisplacement: start has only degenerate faces");
-  TriangleTree tree(triangles.cbegin(), triangles.cend());
-  tree.accelerate_distance_queries();
-  const Eigen::Vector3d offset = target.origin - start.origin;
-  const std::vector<Eigen::Vector3f> normals = VertexNormals(target);
-#pragma omp parallel for schedule(dynamic, 1024)
-  for (long v = 0; v < long(target.num_vertices()); ++v) {
-    const Eigen::Vector3d p = target.vertices[size_t(v)].cast<double>() + offset;
-    const auto [closest, it] = tree.closest_point_and_primitive(Kernel::Point_3(p.x(), p.y(), p.z()));
-    const size_t k = size_t(it - triangles.cbegin());
-    const Eigen::Vector3i& t = start.faces[face_of[k]];
-    // Barycentric coordinates of the closest point in its triangle (least squares, so a
-    // point on an edge is exact too).
-    const Eigen::Vector3d a = start.vertices[size_t(t[0])].cast<double>();
-    const Eigen::Vector3d e1 = start.vertices[size_t(t[1])].cast<double>() - a;
-    const Eigen::Vector3d e2 = start.vertices[size_t(t[2])].cast<double>() - a;
-    const Eigen::Vector3d q = Eigen::Vector3d(closest.x(), closest.y(), closest.z()) - a;
-    const double d00 = e1.dot(e1), d01 = e1.dot(e2), d11 = e2.dot(e2);
-    const double d20 = q.dot(e1), d21 = q.dot(e2);
-    const double den = d00 * d11 - d01 * d01;
-    const double b1 = std::clamp((d11 * d20 - d01 * d21) / den, 0.0, 1.0);
-    const double b2 = std::clamp((d00 * d21 - d01 * d20) / den, 0.0, 1.0 - b1);
-    const double b0 = 1.0 - b1 - b2;
-    Eigen::Vector3d moved = Eigen::Vector3d::Zero();
-    const double b[3] = {b0, b1, b2};
-    for (int c = 0; c < 3; ++c)
-      moved += b[c] * (end.vertices[size_t(t[c])] - start.vertices[size_t(t[c])]).cast<double>();
-    // Up-facing parts (roofs, ground) move with the coarse level; walls and overhangs,
-    // which a coarse mesh does not hold, keep their own place.
-    // And only where the coarse face is of the same surface (normals within 37 degrees,
-    // fading from 18): near a wall the coarse mesh bridges roof and street with a slope
-    // whose move is the wall's blur, not the roof's or the street's correction.
-    const Eigen::Vector3d n = normals[size_t(v)].cast<double>();
-    const double up = std::clamp((n.z() - 0.5) / 0.3, 0.0, 1.0);
-    const double same = std::clamp((e1.cross(e2).normalized().dot(n) - 0.8) / 0.15, 0.0, 1.0);
-    moved *= up * same;
-    target.vertices[size_t(v)] += moved.cast<float>();
-  }
-  target.height_sigma.clear();
-  return target;
 }
 
 }  // namespace satmesh

@@ -12,6 +12,7 @@
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/bias_estimation.h"
+#include "core/refine/carry_displacement.h"
 #include "core/refine/coarse_mesh.h"
 #include "core/refine/height_confidence.h"
 #include "core/refine/mesh_resolution.h"

@@ -112,6 +112,17 @@ std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
 
 // One photometric pass over both directions of every pair through the fixed `mesh`:
 // the mean ZNCC, and each vertex's Fisher information when `information` is not null.
+// The images' suns when moving shadows are left out of the pairs (sunlit_pairs), else
+// none; none too when no image says where its sun was.
+std::vector<Eigen::Vector3f> SunsToMask(const RefineInput& input, const RefineOptions& options) {
+  std::vector<Eigen::Vector3f> suns;
+  if (!options.MatchesSunlitOnly(input.initial_is_mesh)) return suns;
+  for (const RefineView& v : input.views) suns.push_back(SunDirection(v.acquisition));
+  if (std::all_of(suns.begin(), suns.end(), [](const auto& d) { return d.squaredNorm() == 0; }))
+    suns.clear();
+  return suns;
+}
+
 double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& sources,
                    const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
                    double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize,
@@ -130,13 +141,10 @@ double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& so
   PhotometricOptions photo = PhotometricOptionsAt(options, level_gsd_m, MeanNoiseVariance(sources, level));
   // sunlit: moving shadows left out as the level's iterations leave them out (sunlit_pairs),
   // so that a ZNCC measured here compares with theirs.
-  if (sunlit && options.MatchesSunlitOnly(input.initial_is_mesh)) {
-    std::vector<Eigen::Vector3f> suns;
-    for (const RefineView& v : input.views) suns.push_back(SunDirection(v.acquisition));
-    if (!std::all_of(suns.begin(), suns.end(), [](const auto& d) { return d.squaredNorm() == 0; })) {
-      MarkSunlight(mesh, normals, suns, pairs, &views);
-      photo.sunlit_only = true;
-    }
+  const std::vector<Eigen::Vector3f> suns = sunlit ? SunsToMask(input, options) : std::vector<Eigen::Vector3f>{};
+  if (!suns.empty()) {
+    MarkSunlight(mesh, normals, suns, pairs, &views);
+    photo.sunlit_only = true;
   }
   std::vector<PassScratch> scratch;
   if (information) information->assign(mesh.num_vertices(), 0.0);
@@ -182,12 +190,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // Moving shadows (sunlit_pairs): which suns light each pixel's point, by the level's
   // surface at its first iteration and again at its last (the light changes little while
   // the surface moves by a fraction of a metre; marking costs ~3 s a time at 0.5 m).
-  std::vector<Eigen::Vector3f> suns;
-  if (opt.MatchesSunlitOnly(ctx.input.initial_is_mesh)) {
-    for (const RefineView& v : ctx.input.views) suns.push_back(SunDirection(v.acquisition));
-    if (std::all_of(suns.begin(), suns.end(), [](const auto& d) { return d.squaredNorm() == 0; }))
-      suns.clear();  // no image says where its sun was
-  }
+  const std::vector<Eigen::Vector3f> suns = SunsToMask(ctx.input, opt);
   photo.sunlit_only = !suns.empty();
 
   std::optional<RayScene> scene;  // Embree, unless the hit maps are rasterized

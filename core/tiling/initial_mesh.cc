@@ -10,7 +10,7 @@
 #include "core/common/error.h"
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
-#include "core/refine/coarse_mesh.h"
+#include "core/refine/fill_holes.h"
 
 namespace satmesh {
 namespace {

@@ -1,5 +1,8 @@
 #include "core/refine/coarse_mesh.h"
 
+#include "core/refine/carry_displacement.h"
+#include "core/refine/fill_holes.h"
+
 #include <gtest/gtest.h>
 #include <omp.h>
 
