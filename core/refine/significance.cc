@@ -202,10 +202,12 @@ SignificanceStats KeepSignificantChanges(const TriangleMesh& initial,
     const double d = offsets[v];
     if (std::isnan(d)) continue;
     const double sigma = sigmas[v];
+    const bool seen = std::isfinite(sigma) && sigma > 0;
     const double r = residual[v];
-    const double z = std::isfinite(sigma) && sigma > 0 ? r / sigma : 0.0;
+    const double z = seen ? r / sigma : 0.0;
     const double gain = k > 0 ? SignificanceGain(z, k) : 1.0;  // k = 0: the registration only
-    const double keep = pooled[v] + gain * r;
+    // Unseen: no pooled share either (k = 0 keeps everything).
+    const double keep = k > 0 && !seen ? 0.0 : pooled[v] + gain * r;
     mesh->vertices[v] -= float(d - keep) * normals[v];
     if (d != 0) {
       gain_sum += std::clamp(keep / d, 0.0, 1.0);

@@ -73,8 +73,10 @@ std::vector<double> PooledSignificantOffsets(const TriangleMesh& mesh,
 // whole region: no pooling gets below it). Then what is left of each vertex's offset, r,
 // with the weight g = z^4 / (z^4 + k^4), z = r / sigma: a change of less than about k
 // sigmas, which the images' noise alone makes, returns to the initial surface; a larger
-// one stays (at 2k, 94% of it). A vertex no image sees (sigma infinite) keeps only the
-// pooled share. hold_boundary_xy: the mesh's border vertices (tile edges) move
+// one stays (at 2k, 94% of it). A vertex no image sees (sigma infinite) returns to the
+// initial surface: its neighbours' coherent move is evidence about them, not about a
+// soffit or a wall foot they hide (refined from the true multi-date 0.5 m surface, under
+// overhangs 97.8 -> 98.1%; docs/benchmarks-history.md, session 22). hold_boundary_xy: the mesh's border vertices (tile edges) move
 // vertically instead, so the outline stays where it is. Both meshes in the same frame;
 // k > 0, or k = 0 with register_to_initial (the registration alone, every offset kept).
 // register_to_initial: first the translation RegisterToInitial finds (prior sigma

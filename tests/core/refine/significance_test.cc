@@ -230,6 +230,14 @@ TEST(KeepSignificantChanges, PooledTestsKeepACoherentCorrectionThatEachVertexCan
     std::normal_distribution<float> noise(0.f, 0.3f);
     refined.height_sigma.assign(refined.num_vertices(), 0.3f);
     for (auto& p : refined.vertices) p.z() += (has_error ? wave(p) : 0.f) + noise(gen);
+    // A vertex no image saw, on the wave's crest (40, 30), stayed where it started
+    // (hold_unseen): its neighbours' coherent move says nothing about it.
+    const auto unseen = std::find(initial.vertices.begin(), initial.vertices.end(),
+                                  Eigen::Vector3f(40.f, 30.f, 0.f)) - initial.vertices.begin();
+    ASSERT_LT(size_t(unseen), initial.num_vertices());
+    ASSERT_NEAR(wave(initial.vertices[unseen]), 0.6f, 1e-4f);
+    refined.vertices[unseen].z() = 0.f;
+    refined.height_sigma[unseen] = std::numeric_limits<float>::infinity();
     SignificanceOptions pooled = PerVertex(2, 3, false);
     pooled.scales = 3;
     pooled.gsd_m = 0.5;
@@ -260,6 +268,8 @@ TEST(KeepSignificantChanges, PooledTestsKeepACoherentCorrectionThatEachVertexCan
       // anyway (0.127 m on noise alone; measured 0.172 m).
       EXPECT_LT(rms_error(pooled_mesh), 0.45 * start);
       EXPECT_GT(stats.pooled_share, 0.4);  // measured 0.53
+      // Its neighbours' pooled offset (~0.6 m) not given to the vertex no image saw.
+      EXPECT_NEAR(pooled_mesh.vertices[unseen].z(), 0.f, 1e-5f);
     } else {
       // Noise only: both undo most of it (of 0.3 m RMS, 0.127 m is left: the offsets
       // beyond 2 sigmas stay), the pooled tests adding less than 0.03 m to it.
