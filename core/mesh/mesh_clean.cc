@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdint>
 #include <unordered_map>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -17,18 +16,22 @@ namespace satmesh {
 namespace {
 
 // Each vertex -> the first vertex within `distance` of it (itself if none), through a
-// hash of cells of edge `distance`: a close vertex is in one of the 27 cells around.
+// hash of cells of edge `distance`: a close vertex is in one of the 27 cells around. The
+// cells' vertices are chained in insertion order (head, tail, next: no allocation per
+// cell), so "first" is the lowest index scanned as the cells are, as before.
 std::vector<int> MergeMap(const TriangleMesh& mesh, double distance, size_t* merged) {
   const auto cell_of = [distance](float c) { return int64_t(std::floor(double(c) / distance)); };
   const auto key = [](int64_t x, int64_t y, int64_t z) {
     return uint64_t(x) * 73856093ULL ^ uint64_t(y) * 19349663ULL ^ uint64_t(z) * 83492791ULL;
   };
-  std::unordered_map<uint64_t, std::vector<int>> cells;
-  cells.reserve(mesh.vertices.size());
-  std::vector<int> map(mesh.vertices.size());
+  const size_t nv = mesh.vertices.size();
+  std::unordered_map<uint64_t, std::pair<int, int>> cells;  // key -> (head, tail)
+  cells.reserve(nv);
+  std::vector<int> next(nv, -1);
+  std::vector<int> map(nv);
   const double d2 = distance * distance;
   *merged = 0;
-  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+  for (size_t i = 0; i < nv; ++i) {
     const Eigen::Vector3f& v = mesh.vertices[i];
     const int64_t cx = cell_of(v.x()), cy = cell_of(v.y()), cz = cell_of(v.z());
     int found = -1;
@@ -37,7 +40,7 @@ std::vector<int> MergeMap(const TriangleMesh& mesh, double distance, size_t* mer
         for (int64_t dz = -1; dz <= 1 && found < 0; ++dz) {
           const auto it = cells.find(key(cx + dx, cy + dy, cz + dz));
           if (it == cells.end()) continue;
-          for (int j : it->second)
+          for (int j = it->second.first; j >= 0; j = next[j])
             if ((mesh.vertices[j] - v).cast<double>().squaredNorm() < d2) {
               found = j;
               break;
@@ -48,7 +51,11 @@ std::vector<int> MergeMap(const TriangleMesh& mesh, double distance, size_t* mer
       ++*merged;
     } else {
       map[i] = int(i);
-      cells[key(cx, cy, cz)].push_back(int(i));
+      const auto [it, added] = cells.try_emplace(key(cx, cy, cz), int(i), int(i));
+      if (!added) {
+        next[it->second.second] = int(i);
+        it->second.second = int(i);
+      }
     }
   }
   return map;
@@ -63,37 +70,35 @@ bool Degenerate(const TriangleMesh& mesh, const Eigen::Vector3i& f, double min_h
   return !(twice_area >= min_height * longest);  // NaN counts as degenerate
 }
 
-struct FaceKey {
-  std::array<int, 3> v;
-  bool operator==(const FaceKey& o) const { return v == o.v; }
-};
-struct FaceKeyHash {
-  size_t operator()(const FaceKey& k) const {
-    return (size_t(k.v[0]) * 73856093u) ^ (size_t(k.v[1]) * 19349663u) ^ (size_t(k.v[2]) * 83492791u);
-  }
-};
-
-// Faces kept (indices into mesh.faces, after the vertex map), counting what is dropped.
+// Faces kept (indices into mesh.faces, after the vertex map), counting what is dropped: a
+// degenerate face, or one whose vertex set an earlier face has (found by sorting the faces'
+// sorted vertex triples, ties by index, so the first of duplicates stays).
 std::vector<int> KeptFaces(const TriangleMesh& mesh, const std::vector<int>& map,
                            const MeshCleanOptions& options, MeshDebris* debris) {
-  std::unordered_set<FaceKey, FaceKeyHash> seen;
-  seen.reserve(mesh.faces.size());
-  std::vector<int> kept;
-  kept.reserve(mesh.faces.size());
-  for (size_t i = 0; i < mesh.faces.size(); ++i) {
+  const size_t nf = mesh.faces.size();
+  std::vector<std::pair<std::array<int, 3>, int>> keys;
+  keys.reserve(nf);
+  for (size_t i = 0; i < nf; ++i) {
     const Eigen::Vector3i f(map[mesh.faces[i][0]], map[mesh.faces[i][1]], map[mesh.faces[i][2]]);
     if (Degenerate(mesh, f, options.min_face_height_m)) {
       ++debris->degenerate_faces;
       continue;
     }
-    FaceKey key{{f[0], f[1], f[2]}};
-    std::sort(key.v.begin(), key.v.end());
-    if (!seen.insert(key).second) {
+    std::array<int, 3> key{f[0], f[1], f[2]};
+    std::sort(key.begin(), key.end());
+    keys.emplace_back(key, int(i));
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<int> kept;
+  kept.reserve(keys.size());
+  for (size_t k = 0; k < keys.size(); ++k) {
+    if (k > 0 && keys[k].first == keys[k - 1].first) {
       ++debris->duplicate_faces;
       continue;
     }
-    kept.push_back(int(i));
+    kept.push_back(keys[k].second);
   }
+  std::sort(kept.begin(), kept.end());  // the faces' order as given
   return kept;
 }
 
