@@ -45,6 +45,23 @@ class ClosestTriangle {
     const auto [q, it] = tree_.closest_point_and_primitive(p);
     return {q, ids_[size_t(it - triangles_.cbegin())]};
   }
+  // The same, starting the search from triangle `hint` (an index this returned before,
+  // e.g. for a nearby point; any index < size() gives the same answer, a near one sooner);
+  // *index: the closest triangle's index.
+  Kernel::Point_3 ClosestFrom(const Kernel::Point_3& p, size_t hint, size_t* index) const {
+    const auto hint_it = triangles_.cbegin() + long(hint);
+    const Kernel::Point_3 start = Kernel().construct_projected_point_3_object()(*hint_it, p);
+    const auto [q, it] = tree_.closest_point_and_primitive(p, std::make_pair(start, hint_it));
+    *index = size_t(it - triangles_.cbegin());
+    return q;
+  }
+  // The closest point; *index: its triangle's index (for ClosestFrom).
+  Kernel::Point_3 ClosestIndexed(const Kernel::Point_3& p, size_t* index) const {
+    const auto [q, it] = tree_.closest_point_and_primitive(p);
+    *index = size_t(it - triangles_.cbegin());
+    return q;
+  }
+  size_t size() const { return triangles_.size(); }
 
  private:
   using Triangle = Kernel::Triangle_3;
@@ -70,6 +87,17 @@ class SurfaceProjector {
   Kernel::Point_3 Closest(const Kernel::Point_3& p) const {
     return faces_.empty() ? p : faces_.Closest(p).first;
   }
+  // The same, *hint the triangle of an earlier answer for a nearby point (or kNoHint),
+  // set to this answer's: a vertex relaxed again starts where it was projected last.
+  static constexpr uint32_t kNoHint = ~0u;
+  Kernel::Point_3 Closest(const Kernel::Point_3& p, uint32_t* hint) const {
+    if (faces_.empty()) return p;
+    size_t index = 0;
+    const Kernel::Point_3 q = *hint < faces_.size() ? faces_.ClosestFrom(p, *hint, &index)
+                                                    : faces_.ClosestIndexed(p, &index);
+    *hint = uint32_t(index);
+    return q;
+  }
 
  private:
   ClosestTriangle faces_;
@@ -83,9 +111,13 @@ class SurfaceProjector {
 // 5.5's own (inside isotropic_remeshing) reads a null halfedge when every face around a
 // moved vertex is degenerate (the true tri-stereo 0.5 m building mesh remeshed at 2 m
 // crashed), so it is off there and done here. movable: which vertices may move (empty: all).
+// hints (optional, "v:projected", kNoHint for none): per vertex, the triangle of
+// `surface` it was last projected onto, read and written (valid for this `surface` only).
+using ProjectionHints = SurfaceMesh::Property_map<SurfaceMesh::Vertex_index, uint32_t>;
 template <typename ConstraintMap>
 inline void RelaxTangentially(ConstraintMap is_constrained, const SurfaceProjector& surface, SurfaceMesh* sm,
-                       const std::function<bool(SurfaceMesh::Vertex_index)>& movable = {}) {
+                       const std::function<bool(SurfaceMesh::Vertex_index)>& movable = {},
+                       ProjectionHints* hints = nullptr) {
   using Vector = Eigen::Vector3d;
   const auto at = [&](SurfaceMesh::Vertex_index v) {
     const auto& p = sm->point(v);
@@ -145,7 +177,10 @@ inline void RelaxTangentially(ConstraintMap is_constrained, const SurfaceProject
       }
     }
   }
-  for (auto v : moved) sm->point(v) = surface.Closest(sm->point(v));
+  if (hints)
+    for (auto v : moved) sm->point(v) = surface.Closest(sm->point(v), &(*hints)[v]);
+  else
+    for (auto v : moved) sm->point(v) = surface.Closest(sm->point(v));
 }
 
 }  // namespace satmesh::cgal_surface

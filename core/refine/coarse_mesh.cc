@@ -196,8 +196,9 @@ template <typename ConstraintMap>
 void RemeshInPlace(const CoarseMeshOptions& options, ConstraintMap is_constrained, bool protect,
                    const std::function<bool()>& cancelled, SurfaceMesh* sm) {
   const SurfaceProjector input(*sm);
-  for (int it = 0; it < options.iterations; ++it) {
-    if (cancelled()) return;
+  auto hints = sm->add_property_map<SurfaceMesh::Vertex_index, uint32_t>(
+                     "v:projected", SurfaceProjector::kNoHint).first;
+  for (int it = 0; it < options.iterations && !cancelled(); ++it) {
     PMP::isotropic_remeshing(faces(*sm), options.target_edge_m, *sm,
                              PMP::parameters::number_of_iterations(1)
                                  .number_of_relaxation_steps(0)
@@ -206,8 +207,9 @@ void RemeshInPlace(const CoarseMeshOptions& options, ConstraintMap is_constraine
                                  .edge_is_constrained_map(is_constrained)
                                  .protect_constraints(protect)
                                  .relax_constraints(false));
-    RelaxTangentially(is_constrained, input, sm);
+    RelaxTangentially(is_constrained, input, sm, {}, &hints);
   }
+  sm->remove_property_map(hints);
 }
 
 // One block: its faces remeshed with the block's border protected. Returns the result;
@@ -363,6 +365,8 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
     if (!in_band[uint32_t(f)])
       for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) inside[v] = true;
   const SurfaceProjector input(sm);
+  auto hints = sm.add_property_map<SurfaceMesh::Vertex_index, uint32_t>(
+                    "v:projected", SurfaceProjector::kNoHint).first;
   for (int it = 0; it < options.iterations && !band.empty(); ++it) {
     progress.ThrowIfCancelled();
     if (it > 0) {
@@ -383,8 +387,9 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
                                  .protect_constraints(false)
                                  .relax_constraints(false));
     RelaxTangentially(is_constrained, input, &sm,
-                      [&](SurfaceMesh::Vertex_index v) { return !inside[v]; });
+                      [&](SurfaceMesh::Vertex_index v) { return !inside[v]; }, &hints);
   }
+  sm.remove_property_map(hints);
   progress.ThrowIfCancelled();
   return sm;
 }
