@@ -45,19 +45,18 @@ class ClosestTriangle {
     const auto [q, it] = tree_.closest_point_and_primitive(p);
     return {q, ids_[size_t(it - triangles_.cbegin())]};
   }
-  // The same, starting the search from triangle `hint` (an index this returned before,
-  // e.g. for a nearby point; any index < size() gives the same answer, a near one sooner);
-  // *index: the closest triangle's index.
-  Kernel::Point_3 ClosestFrom(const Kernel::Point_3& p, size_t hint, size_t* index) const {
-    const auto hint_it = triangles_.cbegin() + long(hint);
-    const Kernel::Point_3 start = Kernel().construct_projected_point_3_object()(*hint_it, p);
-    const auto [q, it] = tree_.closest_point_and_primitive(p, std::make_pair(start, hint_it));
-    *index = size_t(it - triangles_.cbegin());
-    return q;
-  }
-  // The closest point; *index: its triangle's index (for ClosestFrom).
-  Kernel::Point_3 ClosestIndexed(const Kernel::Point_3& p, size_t* index) const {
-    const auto [q, it] = tree_.closest_point_and_primitive(p);
+  // The closest point, the search started from triangle *index when it is < size() (an
+  // index this returned before, e.g. for a nearby point: any gives the same answer, a near
+  // one sooner); *index is set to the closest triangle's index.
+  static constexpr size_t kNoHint = ~size_t{0};
+  Kernel::Point_3 Closest(const Kernel::Point_3& p, size_t* index) const {
+    const auto [q, it] =
+        *index < triangles_.size()
+            ? tree_.closest_point_and_primitive(
+                  p, std::make_pair(Kernel().construct_projected_point_3_object()(
+                                        triangles_[*index], p),
+                                    triangles_.cbegin() + long(*index)))
+            : tree_.closest_point_and_primitive(p);
     *index = size_t(it - triangles_.cbegin());
     return q;
   }
@@ -84,17 +83,14 @@ class SurfaceProjector {
     }
     faces_.Build();
   }
-  Kernel::Point_3 Closest(const Kernel::Point_3& p) const {
-    return faces_.empty() ? p : faces_.Closest(p).first;
-  }
-  // The same, *hint the triangle of an earlier answer for a nearby point (or kNoHint),
-  // set to this answer's: a vertex relaxed again starts where it was projected last.
+  // The closest point; *hint: the triangle of an earlier answer for a nearby point (or
+  // kNoHint), set to this answer's, so a vertex relaxed again starts where it was
+  // projected last.
   static constexpr uint32_t kNoHint = ~0u;
   Kernel::Point_3 Closest(const Kernel::Point_3& p, uint32_t* hint) const {
     if (faces_.empty()) return p;
-    size_t index = 0;
-    const Kernel::Point_3 q = *hint < faces_.size() ? faces_.ClosestFrom(p, *hint, &index)
-                                                    : faces_.ClosestIndexed(p, &index);
+    size_t index = *hint == kNoHint ? ClosestTriangle::kNoHint : size_t(*hint);
+    const Kernel::Point_3 q = faces_.Closest(p, &index);
     *hint = uint32_t(index);
     return q;
   }
@@ -110,14 +106,15 @@ class SurfaceProjector {
 // then dropped; the moved vertices are then put on `surface` (the closest point). CGAL
 // 5.5's own (inside isotropic_remeshing) reads a null halfedge when every face around a
 // moved vertex is degenerate (the true tri-stereo 0.5 m building mesh remeshed at 2 m
-// crashed), so it is off there and done here. movable: which vertices may move (empty: all).
-// hints (optional, "v:projected", kNoHint for none): per vertex, the triangle of
-// `surface` it was last projected onto, read and written (valid for this `surface` only).
+// crashed), so it is off there and done here. hints ("v:projected", initially
+// SurfaceProjector::kNoHint): per vertex, the triangle of `surface` it was last projected
+// onto, read and written (valid for this `surface` only). movable: which vertices may move
+// (empty: all).
 using ProjectionHints = SurfaceMesh::Property_map<SurfaceMesh::Vertex_index, uint32_t>;
 template <typename ConstraintMap>
-inline void RelaxTangentially(ConstraintMap is_constrained, const SurfaceProjector& surface, SurfaceMesh* sm,
-                       const std::function<bool(SurfaceMesh::Vertex_index)>& movable = {},
-                       ProjectionHints* hints = nullptr) {
+inline void RelaxTangentially(ConstraintMap is_constrained, const SurfaceProjector& surface,
+                              ProjectionHints hints, SurfaceMesh* sm,
+                              const std::function<bool(SurfaceMesh::Vertex_index)>& movable = {}) {
   using Vector = Eigen::Vector3d;
   const auto at = [&](SurfaceMesh::Vertex_index v) {
     const auto& p = sm->point(v);
@@ -177,10 +174,7 @@ inline void RelaxTangentially(ConstraintMap is_constrained, const SurfaceProject
       }
     }
   }
-  if (hints)
-    for (auto v : moved) sm->point(v) = surface.Closest(sm->point(v), &(*hints)[v]);
-  else
-    for (auto v : moved) sm->point(v) = surface.Closest(sm->point(v));
+  for (auto v : moved) sm->point(v) = surface.Closest(sm->point(v), &hints[v]);
 }
 
 }  // namespace satmesh::cgal_surface

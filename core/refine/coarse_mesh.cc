@@ -207,7 +207,7 @@ void RemeshInPlace(const CoarseMeshOptions& options, ConstraintMap is_constraine
                                  .edge_is_constrained_map(is_constrained)
                                  .protect_constraints(protect)
                                  .relax_constraints(false));
-    RelaxTangentially(is_constrained, input, sm, {}, &hints);
+    RelaxTangentially(is_constrained, input, hints, sm);
   }
   sm->remove_property_map(hints);
 }
@@ -386,8 +386,8 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
                                  .edge_is_constrained_map(is_constrained)
                                  .protect_constraints(false)
                                  .relax_constraints(false));
-    RelaxTangentially(is_constrained, input, &sm,
-                      [&](SurfaceMesh::Vertex_index v) { return !inside[v]; }, &hints);
+    RelaxTangentially(is_constrained, input, hints, &sm,
+                      [&](SurfaceMesh::Vertex_index v) { return !inside[v]; });
   }
   sm.remove_property_map(hints);
   progress.ThrowIfCancelled();

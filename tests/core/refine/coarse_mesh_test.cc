@@ -280,11 +280,13 @@ TEST(ClosestTriangle, AnyHintGivesTheClosestPoint) {
   std::uniform_int_distribution<size_t> any(0, faces.size() - 1);
   for (int i = 0; i < 500; ++i) {
     const Kernel::Point_3 p(xy(rng), xy(rng), z(rng));
-    size_t index = 0, near_index = 0, from_random = 0, from_near = 0;
-    const Kernel::Point_3 best = faces.ClosestIndexed(p, &index);
-    faces.ClosestIndexed(Kernel::Point_3(p.x() + d(rng), p.y() + d(rng), p.z() + d(rng)), &near_index);
-    const Kernel::Point_3 a = faces.ClosestFrom(p, any(rng), &from_random);
-    const Kernel::Point_3 b = faces.ClosestFrom(p, near_index, &from_near);
+    using Faces = cgal_surface::ClosestTriangle;
+    size_t index = Faces::kNoHint, near_index = Faces::kNoHint, from_random = any(rng);
+    const Kernel::Point_3 best = faces.Closest(p, &index);
+    faces.Closest(Kernel::Point_3(p.x() + d(rng), p.y() + d(rng), p.z() + d(rng)), &near_index);
+    ASSERT_LT(near_index, faces.size());
+    const Kernel::Point_3 a = faces.Closest(p, &from_random);
+    const Kernel::Point_3 b = faces.Closest(p, &near_index);
     const double dist = std::sqrt(CGAL::squared_distance(p, best));
     // The same distance (a tie may pick another triangle of the same point or edge).
     EXPECT_NEAR(std::sqrt(CGAL::squared_distance(p, a)), dist, 1e-9) << i;
