@@ -110,8 +110,6 @@ std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
   return views;
 }
 
-// One photometric pass over both directions of every pair through the fixed `mesh`:
-// the mean ZNCC, and each vertex's Fisher information when `information` is not null.
 // The images' suns when moving shadows are left out of the pairs (sunlit_pairs), else
 // none; none too when no image says where its sun was.
 std::vector<Eigen::Vector3f> SunsToMask(const RefineInput& input, const RefineOptions& options) {
@@ -123,6 +121,8 @@ std::vector<Eigen::Vector3f> SunsToMask(const RefineInput& input, const RefineOp
   return suns;
 }
 
+// One photometric pass over both directions of every pair through the fixed `mesh`:
+// the mean ZNCC, and each vertex's Fisher information when `information` is not null.
 double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& sources,
                    const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
                    double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize,

@@ -62,6 +62,8 @@ struct JobSpec {
   TilingOptions tiling;
   RefineOptions refine;
   std::string Check() const;   // "" or what is wrong (field named)
+  // The job refines a mesh (initial_mesh given), not a DSM.
+  bool StartsFromMesh() const { return !initial_mesh.path.empty(); }
 };
 
 }  // namespace satmesh

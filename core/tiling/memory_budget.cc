@@ -63,7 +63,7 @@ TileMemoryEstimate EstimateTileMemory(const JobSpec& spec, const DsmGrid& grid,
           box_geo.push_back(geo_from_dsm.Apply(Eigen::Vector3d(
               box.xmin + fx * box.width(), box.ymin + fy * box.height(), h)));
     const double cell_m = std::abs(grid.geo_transform[1]);
-    const int margin_px = TileWindowMarginPx(spec.refine, cell_m, !spec.initial_mesh.path.empty());
+    const int margin_px = TileWindowMarginPx(spec.refine, cell_m, spec.StartsFromMesh());
     for (const ImageFootprintModel& image : images) {
       const PixelWindow w = ImageWindowSeeing(image.rpc, box_geo, image.info, margin_px);
       if (w.width < 16 || w.height < 16) continue;

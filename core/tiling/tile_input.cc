@@ -108,7 +108,7 @@ void FrameAndViews(const JobSpec& spec, const std::string& crs, const Box2d& box
 
   // Window margin for the coarsest level's pixels (the GSD is not known yet: the grid's
   // cell stands in for it, as in CoarseCellSize).
-  const int margin_px = TileWindowMarginPx(spec.refine, cell_m, !spec.initial_mesh.path.empty());
+  const int margin_px = TileWindowMarginPx(spec.refine, cell_m, spec.StartsFromMesh());
   for (const auto& image : spec.images) {
     const RpcModel rpc = ReadRpc(image.path).WithBias(image.bias_col_row_px);
     const RasterInfo info = ReadRasterInfo(image.path);
@@ -254,7 +254,7 @@ TileInput PrepareTileInput(const JobSpec& spec, const JobPlan& plan, int tile_in
   SATMESH_CHECK(tile_index >= 0 && tile_index < int(plan.tiles.size()), ErrorCode::kInvalidArgument,
                 "tile index " + std::to_string(tile_index) + " out of range");
   const PlannedTile& t = plan.tiles[tile_index];
-  if (!spec.initial_mesh.path.empty()) return PrepareMeshTileInput(spec, plan, t);
+  if (spec.StartsFromMesh()) return PrepareMeshTileInput(spec, plan, t);
   Dsm crop = ReadDsmWindow(spec.initial_dsm, t.padded_cells);
   const bool any_valid = std::any_of(crop.z.begin(), crop.z.end(), [](float z) { return std::isfinite(z); });
   SATMESH_CHECK(any_valid, ErrorCode::kInvalidInput,

@@ -335,7 +335,7 @@ JobPlan PlanJob(const JobSpec& spec) {
   JobPlan plan;
   const std::vector<ImageFootprintModel> images = ReadImageFootprintModels(spec);
   std::optional<InitialMesh> read;
-  if (!spec.initial_mesh.path.empty()) {
+  if (spec.StartsFromMesh()) {
     if (!spec.output_crs.empty()) CheckCrs("outputs.crs", spec.output_crs, kWgs84Geographic3D);
     read = ReadInitialMesh(spec);
   }
