@@ -213,6 +213,7 @@ int RunBench(const std::vector<std::string>& argv) {
     for (const auto& level : refine.levels) {
       const StageTimes t = PerIteration(level);
       levels.push_back({{"level", level.level}, {"iterations", level.iterations},
+                        {"pair_directions", level.pair_directions},
                         {"vertices", level.num_vertices}, {"faces", level.num_faces},
                         {"gsd_m", level.gsd_m}, {"mean_zncc", level.mean_zncc},
                         {"per_iteration_s", {{"hit_maps", t.hit_maps_s}, {"gradient", t.gradient_s},

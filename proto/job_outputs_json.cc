@@ -27,6 +27,7 @@ json LevelsToJson(const std::vector<LevelStats>& levels) {
   for (const auto& l : levels) {
     out.push_back({{"level", l.level},
                    {"iterations", l.iterations},
+                   {"pair_directions", l.pair_directions},
                    {"gsd_m", l.gsd_m},
                    {"vertices", l.num_vertices},
                    {"faces", l.num_faces},
@@ -64,6 +65,7 @@ std::vector<LevelStats> LevelsFromJson(const json& levels) {
     LevelStats s;
     s.level = l.value("level", 0);
     s.iterations = l.value("iterations", 0);
+    s.pair_directions = l.value("pair_directions", 0);
     s.gsd_m = l.value("gsd_m", 0.0);
     s.num_vertices = l.value("vertices", 0);
     s.num_faces = l.value("faces", 0);

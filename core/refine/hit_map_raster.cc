@@ -336,23 +336,27 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
 }
 
 void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
-                      HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals) {
+                      HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals,
+                      const std::vector<char>* only) {
   scratch->threads.resize(omp_get_max_threads());
   FillFaceRecords(mesh, face_normals, &scratch->faces);  // shared by all views
   // Inside, RasterizeHitMapWith's own parallel regions run on the calling thread alone.
 #pragma omp parallel for schedule(dynamic, 1)
   for (size_t v = 0; v < views->size(); ++v)
-    RasterizeHitMapWith(mesh, scratch->faces, face_normals != nullptr, &(*views)[v],
+    if (!only || (*only)[v])
+      RasterizeHitMapWith(mesh, scratch->faces, face_normals != nullptr, &(*views)[v],
                         &scratch->threads[omp_get_thread_num()]);
 }
 
 void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
-                   HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals) {
+                   HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals,
+                   const std::vector<char>* only) {
   FillFaceRecords(mesh, face_normals, &scratch->faces);
   // One view per thread, as RasterizeHitMaps; FillHitPoints's loop runs on it alone.
 #pragma omp parallel for schedule(dynamic, 1)
   for (size_t v = 0; v < views->size(); ++v)
-    FillHitPoints(scratch->faces, face_normals != nullptr, &(*views)[v],
+    if (!only || (*only)[v])
+      FillHitPoints(scratch->faces, face_normals != nullptr, &(*views)[v],
                   [](size_t) { return false; });
 }
 

@@ -47,6 +47,8 @@ struct StageTimes {
 struct LevelStats {
   int level = 0;
   int iterations = 0;
+  int pair_directions = 0;             // photometric passes of one pair-direction, all
+                                       // iterations together (pairs_per_iteration)
   int num_vertices = 0, num_faces = 0;
   double gsd_m = 0;                    // ground sampling distance of the level
   std::vector<double> mean_zncc;       // before each iteration, and after the last

@@ -36,6 +36,9 @@ namespace {
 // in 3D below the coarsest level cost 0.3-0.5 points of facades).
 constexpr double kInitialPullPerIteration = 0.1;
 
+// pairs_per_iteration: the iterations before a level's last that take every pair again.
+constexpr int kEveryPairAtTheEnd = 6;
+
 
 // One thread's buffers of the photometric pass, kept across iterations: they are tens
 // of MB a thread at level 0, and fresh ones cost page faults and zeroing every pass.
@@ -232,18 +235,46 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       coarsest ? int(std::lround(opt.coarsest_iterations_factor * opt.iterations_per_level))
                : opt.iterations_per_level;
 
+  // pairs_per_iteration: the pairs fall into `groups`; a middle iteration takes one group,
+  // in turn, and updates only its views' hit maps (made anew every hit_maps_every turns,
+  // else followed). The last kEveryPairAtTheEnd iterations take every pair again: one
+  // group's step is a noisier one, and the surface ends where all pairs agree (the jax set
+  // at 300 m, 39 pairs in 3 groups: roofs NMAD 0.058 m without, 0.054 m with, as with every
+  // pair every iteration; docs/benchmarks-history.md, session 23).
+  const int num_pairs = int(ctx.pairs.size());
+  const int groups = opt.pairs_per_iteration > 0
+                         ? (num_pairs + opt.pairs_per_iteration - 1) / opt.pairs_per_iteration
+                         : 1;
+  std::vector<std::pair<int, int>> group_pairs;
+  std::vector<char> in_group(views.size()), rasterize(views.size()), follow(views.size());
+  std::vector<int> made_at(views.size(), 0);
+
   for (int it = 0; it <= iterations; ++it) {
     ctx.progress.ThrowIfCancelled();
     const bool last = it == iterations;
+    const bool grouped = groups > 1 && it > 0 && it < iterations - kEveryPairAtTheEnd;
+    group_pairs.clear();
+    for (int k = 0; k < num_pairs; ++k)
+      if (!grouped || k % groups == (it - 1) % groups) group_pairs.push_back(ctx.pairs[k]);
+    std::fill(in_group.begin(), in_group.end(), !grouped);
+    for (const auto& [i, j] : group_pairs) in_group[slot[i]] = in_group[slot[j]] = 1;
+    for (size_t v = 0; v < views.size(); ++v) {
+      const bool fresh =
+          it == 0 || last || it - made_at[v] >= opt.hit_maps_every * (grouped ? groups : 1);
+      rasterize[v] = in_group[v] && fresh;
+      follow[v] = in_group[v] && !fresh;  // faces kept, points moved with them
+      if (rasterize[v]) made_at[v] = it;
+    }
     auto t0 = StageClock::now();
     const auto normals = FaceNormals(*mesh);
-    if (it > 0 && !last && it % opt.hit_maps_every != 0) {
-      FollowHitMaps(*mesh, &views, &raster, &normals);  // faces kept, points moved with them
-    } else if (opt.rasterize_hit_maps) {
-      RasterizeHitMaps(*mesh, &views, &raster, &normals);
-    } else {
-      for (auto& v : views) {
-        stats.times.intersect_s += CastHitMap(*scene, &v, &normals);
+    if (std::count(follow.begin(), follow.end(), 1) > 0)
+      FollowHitMaps(*mesh, &views, &raster, &normals, &follow);
+    if (std::count(rasterize.begin(), rasterize.end(), 1) > 0) {
+      if (opt.rasterize_hit_maps) {
+        RasterizeHitMaps(*mesh, &views, &raster, &normals, &rasterize);
+      } else {
+        for (size_t v = 0; v < views.size(); ++v)
+          if (rasterize[v]) stats.times.intersect_s += CastHitMap(*scene, &views[v], &normals);
       }
     }
     if (!suns.empty() && (it == 0 || last)) {
@@ -257,11 +288,13 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
     std::fill(seen.begin(), seen.end(), 0);
     if (last) std::fill(information.begin(), information.end(), 0.0);
-    // Iterations between the first and the last take one direction per pair, alternating.
+    // Iterations between the first and the last take one direction per pair, alternating
+    // (from one turn through the groups to the next where the pairs are grouped).
     const bool half = opt.alternate_directions && it > 0 && !last;
-    const double zncc = PhotometricPass(views, slot, ctx.pairs, *mesh, normals, photo, &scratch,
+    const int turn = grouped ? (it - 1) / groups : it;
+    const double zncc = PhotometricPass(views, slot, group_pairs, *mesh, normals, photo, &scratch,
                                         last ? nullptr : &gradient, last ? nullptr : &seen,
-                                        half ? it % 2 : -1,
+                                        half ? turn % 2 : -1,
                                         (it == 0 && (data_confidence || initial_prior)) ||
                                                 (last && level == 0)
                                             ? &information
@@ -271,6 +304,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     if (it == 0 && initial_prior)
       prior_weight = InitialPriorWeights(information, noise_variance, opt.initial_sigma_gsd * gsd);
     stats.mean_zncc.push_back(zncc);
+    stats.pair_directions += int(group_pairs.size()) * (half ? 1 : 2);
     stats.times.gradient_s += SecondsSince(t0);
     if (it == 0 && zncc < abandon_below) return false;
     if (last) {
@@ -290,7 +324,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const double photo_scale = opt.step * opt.alpha * gsd * gsd;
     const double smooth_scale = opt.step * opt.beta;
     const double max_move = opt.max_step_gsd * gsd;
-    const double directions_per_pair = half ? 1.0 : 2.0;
+    const double directions_per_pair = (half ? 1.0 : 2.0) / (grouped ? groups : 1);
     const float* confidence_of = confidence.data();
 #pragma omp parallel for schedule(static)
     for (long v = 0; v < long(nv); ++v) {

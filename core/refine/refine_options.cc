@@ -80,6 +80,9 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"alternate_directions", &R::alternate_directions, {},
        "iterations other than a level's first and last use one direction per pair, alternating "
        "(half the work); false: both directions every iteration"},
+      {"pairs_per_iteration", &R::pairs_per_iteration, Range::AtLeast(0),
+       "> 0: a level's iterations other than its first and its last few take the pairs in "
+       "turn, this many at most; 0: every pair every iteration"},
       {"normalize_by_pair_count", &R::normalize_by_pair_count, {},
        "each vertex's photometric gradient is divided by the number of pair-directions that saw it"},
       {"min_height_confidence", &R::min_height_confidence, Range::AboveTo(0, 1),

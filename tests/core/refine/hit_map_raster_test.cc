@@ -212,5 +212,55 @@ TEST(FollowHitMaps, PointsMoveWithTheirFacesCloseToAFreshRasterization) {
   EXPECT_GT(double(cos_close) / both, 0.95);
 }
 
+// pairs_per_iteration: an iteration updates only its pairs' views. A view left out keeps
+// its hit map as it was; one rasterized or followed through `only` gets what updating it
+// alone gives.
+TEST(RasterizeHitMaps, OnlyTheChosenViewsAreUpdated) {
+  const TriangleMesh mesh = BlockMesh(1.0);
+  const RefineInput input =
+      testing::MakePlaneInput(testing::Plane{}, {{25, 40}, {20, 200}}, mesh, 120, 0.5);
+  auto make_views = [&] {
+    std::vector<ViewLevel> views;
+    for (int v = 0; v < 2; ++v)
+      views.push_back(MakeViewLevel(v, 0, NormalizeRadiometry(input.views[v].image),
+                                    input.views[v].rpc, input.frame,
+                                    Eigen::Vector3d(-30, -30, -15), Eigen::Vector3d(30, 30, 20), 8));
+    return views;
+  };
+  auto same = [](const HitMap& a, const HitMap& b) {
+    if (a.hits.size() != b.hits.size()) return false;
+    long hits = 0;
+    for (size_t p = 0; p < a.hits.size(); ++p) {
+      if (a.surface[p].face != b.surface[p].face) return false;
+      if (a.surface[p].face < 0) continue;
+      ++hits;
+      if (a.surface[p].point != b.surface[p].point || a.ray_cos[p] != b.ray_cos[p]) return false;
+    }
+    return hits > 5000;
+  };
+  HitMapScratch scratch;
+  const auto normals = FaceNormals(mesh);
+  std::vector<ViewLevel> views = make_views(), before = make_views(), fresh = make_views();
+  RasterizeHitMaps(mesh, &views, &scratch, &normals);
+  RasterizeHitMaps(mesh, &before, &scratch, &normals);
+
+  TriangleMesh moved = mesh;
+  for (auto& v : moved.vertices) v += Eigen::Vector3f(0.01f * v.y(), 0.0f, 0.3f + 0.02f * v.x());
+  const auto moved_normals = FaceNormals(moved);
+  RasterizeHitMaps(moved, &fresh, &scratch, &moved_normals);
+  const std::vector<char> first{1, 0}, second{0, 1};
+  RasterizeHitMaps(moved, &views, &scratch, &moved_normals, &first);
+  EXPECT_TRUE(same(views[0].hit_map, fresh[0].hit_map));
+  EXPECT_TRUE(same(views[1].hit_map, before[1].hit_map));
+  EXPECT_FALSE(same(views[1].hit_map, fresh[1].hit_map));  // the move is seen
+
+  std::vector<ViewLevel> followed = make_views();
+  RasterizeHitMaps(mesh, &followed, &scratch, &normals);
+  FollowHitMaps(moved, &followed, &scratch, &moved_normals);  // both, as the reference
+  FollowHitMaps(moved, &views, &scratch, &moved_normals, &second);
+  EXPECT_TRUE(same(views[0].hit_map, fresh[0].hit_map));  // left as rasterized above
+  EXPECT_TRUE(same(views[1].hit_map, followed[1].hit_map));
+}
+
 }  // namespace
 }  // namespace satmesh

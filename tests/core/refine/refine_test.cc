@@ -138,6 +138,36 @@ TEST(Refine, TiltedPlaneStartedMetresOffConverges) {
     EXPECT_GT(level.mean_zncc.back(), level.mean_zncc.front()) << "level " << level.level;
 }
 
+// pairs_per_iteration: the middle iterations take the pairs in turn, one group each, and
+// the last few take every pair again; the surface converges as with every pair every
+// iteration. DefaultViews' 3 pairs in groups of 1, 2 levels of 30 / 15 iterations.
+TEST(Refine, PairsTakenInTurnConvergeAsEveryPairDoes) {
+  const testing::Plane plane;
+  const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                             testing::PlaneMesh(plane, 40, 1.0, 3.0));
+  RefineOptions all = SmallOptions(), grouped = SmallOptions();
+  all.pairs_per_iteration = 0;
+  grouped.pairs_per_iteration = 1;
+  const RefineResult a = Refine(input, all), b = Refine(input, grouped);
+  ASSERT_EQ(a.pairs.size(), 3u);
+  const auto [mean_a, p95_a] = PlaneError(a.mesh, plane, 30);
+  const auto [mean_b, p95_b] = PlaneError(b.mesh, plane, 30);
+  std::printf("every pair: mean %.4f p95 %.4f m; in turn: mean %.4f p95 %.4f m\n", mean_a, p95_a,
+              mean_b, p95_b);
+  EXPECT_LT(mean_b, 0.1);  // as TiltedPlaneStartedMetresOffConverges
+  EXPECT_LT(p95_b, 0.25);
+  EXPECT_LT(mean_b, 1.5 * mean_a + 0.01);
+  // The schedule: the first and the last iteration both directions of every pair (6
+  // pair-directions each); of the middle ones, those before the last 6 one pair in one
+  // direction, the last 6 one direction of every pair.
+  ASSERT_EQ(a.levels.size(), b.levels.size());
+  for (size_t l = 0; l < b.levels.size(); ++l) {
+    const int middle = b.levels[l].iterations - 1;
+    EXPECT_EQ(a.levels[l].pair_directions, 6 + middle * 3 + 6) << "level " << l;
+    EXPECT_EQ(b.levels[l].pair_directions, 6 + (middle - 6) * 1 + 6 * 3 + 6) << "level " << l;
+  }
+}
+
 // A level below the coarsest restarts from the initial surface when that explains the
 // images better than the previous level's result. Here the coarse start (initial_mesh) is
 // 3 m (6 GSD) off, one iteration per level cannot bring it back, and the surface for the
