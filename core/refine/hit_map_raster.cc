@@ -345,7 +345,7 @@ void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
   for (size_t v = 0; v < views->size(); ++v)
     if (!only || (*only)[v])
       RasterizeHitMapWith(mesh, scratch->faces, face_normals != nullptr, &(*views)[v],
-                        &scratch->threads[omp_get_thread_num()]);
+                          &scratch->threads[omp_get_thread_num()]);
 }
 
 void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
@@ -357,7 +357,7 @@ void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
   for (size_t v = 0; v < views->size(); ++v)
     if (!only || (*only)[v])
       FillHitPoints(scratch->faces, face_normals != nullptr, &(*views)[v],
-                  [](size_t) { return false; });
+                    [](size_t) { return false; });
 }
 
 }  // namespace satmesh

@@ -39,7 +39,6 @@ constexpr double kInitialPullPerIteration = 0.1;
 // pairs_per_iteration: the iterations before a level's last that take every pair again.
 constexpr int kEveryPairAtTheEnd = 6;
 
-
 // One thread's buffers of the photometric pass, kept across iterations: they are tens
 // of MB a thread at level 0, and fresh ones cost page faults and zeroing every pass.
 struct PassScratch {
