@@ -335,29 +335,36 @@ void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace*
   RasterizeHitMapWith(mesh, records, face_normals != nullptr, view, workspace);
 }
 
-void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
-                      HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals,
-                      const std::vector<char>* only) {
+void UpdateHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
+                   HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals,
+                   const std::vector<HitMapUpdate>& update) {
+  if (std::all_of(update.begin(), update.end(), [](HitMapUpdate u) { return u == HitMapUpdate::kKeep; }))
+    return;
   scratch->threads.resize(omp_get_max_threads());
   FillFaceRecords(mesh, face_normals, &scratch->faces);  // shared by all views
-  // Inside, RasterizeHitMapWith's own parallel regions run on the calling thread alone.
+  // One view per thread. Inside, RasterizeHitMapWith's own parallel regions and
+  // FillHitPoints's loop run on the calling thread alone.
 #pragma omp parallel for schedule(dynamic, 1)
-  for (size_t v = 0; v < views->size(); ++v)
-    if (!only || (*only)[v])
+  for (size_t v = 0; v < views->size(); ++v) {
+    if (update[v] == HitMapUpdate::kRasterize)
       RasterizeHitMapWith(mesh, scratch->faces, face_normals != nullptr, &(*views)[v],
                           &scratch->threads[omp_get_thread_num()]);
+    else if (update[v] == HitMapUpdate::kFollow)
+      FillHitPoints(scratch->faces, face_normals != nullptr, &(*views)[v],
+                    [](size_t) { return false; });
+  }
+}
+
+void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
+                      HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals) {
+  UpdateHitMaps(mesh, views, scratch, face_normals,
+                std::vector<HitMapUpdate>(views->size(), HitMapUpdate::kRasterize));
 }
 
 void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
-                   HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals,
-                   const std::vector<char>* only) {
-  FillFaceRecords(mesh, face_normals, &scratch->faces);
-  // One view per thread, as RasterizeHitMaps; FillHitPoints's loop runs on it alone.
-#pragma omp parallel for schedule(dynamic, 1)
-  for (size_t v = 0; v < views->size(); ++v)
-    if (!only || (*only)[v])
-      FillHitPoints(scratch->faces, face_normals != nullptr, &(*views)[v],
-                    [](size_t) { return false; });
+                   HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals) {
+  UpdateHitMaps(mesh, views, scratch, face_normals,
+                std::vector<HitMapUpdate>(views->size(), HitMapUpdate::kFollow));
 }
 
 }  // namespace satmesh

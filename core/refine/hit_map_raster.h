@@ -48,13 +48,11 @@ struct HitMapScratch {
 void RasterizeHitMap(const TriangleMesh& mesh, ViewLevel* view, RasterWorkspace* workspace,
                      const std::vector<Eigen::Vector3f>* face_normals = nullptr);
 
-// The hit maps of all views (of those whose `only` entry is non-zero, when given), one
-// view per thread (a view alone does not keep two threads busy: every band must scan
-// every face).
+// The hit maps of all views, one view per thread (a view alone does not keep two
+// threads busy: every band must scan every face).
 void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
                       HitMapScratch* scratch,
-                      const std::vector<Eigen::Vector3f>* face_normals = nullptr,
-                      const std::vector<char>* only = nullptr);
+                      const std::vector<Eigen::Vector3f>* face_normals = nullptr);
 
 // Between two rasterizations (or ray castings): each pixel keeps its face and barycentric
 // coordinates, and its hit point, ray parameter and ray cosine (when face_normals is not
@@ -62,10 +60,15 @@ void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
 // level pixels) an iteration, typically a tenth of that, so a pixel's point leaves its ray
 // by a fraction of that move (RefineOptions::hit_maps_every; docs/benchmarks-history.md,
 // session 8).
-// `only`: as RasterizeHitMaps. A view left out keeps its faces: it can follow them later,
-// however many iterations its hit map missed.
 void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
+                   HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals);
+
+// Per view: its hit map kept as it is, followed (FollowHitMaps) or rasterized anew
+// (RasterizeHitMaps). A view kept keeps its faces: it can follow them later, however many
+// iterations its hit map missed (RefineOptions::pairs_per_iteration).
+enum class HitMapUpdate : uint8_t { kKeep, kFollow, kRasterize };
+void UpdateHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
                    HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals,
-                   const std::vector<char>* only = nullptr);
+                   const std::vector<HitMapUpdate>& update);
 
 }  // namespace satmesh

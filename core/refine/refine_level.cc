@@ -245,7 +245,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
                          ? (num_pairs + opt.pairs_per_iteration - 1) / opt.pairs_per_iteration
                          : 1;
   std::vector<std::pair<int, int>> group_pairs;
-  std::vector<char> in_group(views.size()), rasterize(views.size()), follow(views.size());
+  std::vector<HitMapUpdate> update(views.size());
   std::vector<int> made_at(views.size(), 0);
 
   for (int it = 0; it <= iterations; ++it) {
@@ -255,27 +255,27 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     group_pairs.clear();
     for (int k = 0; k < num_pairs; ++k)
       if (!grouped || k % groups == (it - 1) % groups) group_pairs.push_back(ctx.pairs[k]);
-    std::fill(in_group.begin(), in_group.end(), !grouped);
-    for (const auto& [i, j] : group_pairs) in_group[slot[i]] = in_group[slot[j]] = 1;
+    // The group's views follow their faces (points moved with them), or are made anew.
+    std::fill(update.begin(), update.end(), grouped ? HitMapUpdate::kKeep : HitMapUpdate::kFollow);
+    for (const auto& [i, j] : group_pairs)
+      update[slot[i]] = update[slot[j]] = HitMapUpdate::kFollow;
     for (size_t v = 0; v < views.size(); ++v) {
-      const bool fresh =
-          it == 0 || last || it - made_at[v] >= opt.hit_maps_every * (grouped ? groups : 1);
-      rasterize[v] = in_group[v] && fresh;
-      follow[v] = in_group[v] && !fresh;  // faces kept, points moved with them
-      if (rasterize[v]) made_at[v] = it;
+      if (update[v] == HitMapUpdate::kFollow &&
+          (it == 0 || last || it - made_at[v] >= opt.hit_maps_every * (grouped ? groups : 1))) {
+        update[v] = HitMapUpdate::kRasterize;
+        made_at[v] = it;
+      }
     }
     auto t0 = StageClock::now();
     const auto normals = FaceNormals(*mesh);
-    if (std::count(follow.begin(), follow.end(), 1) > 0)
-      FollowHitMaps(*mesh, &views, &raster, &normals, &follow);
-    if (std::count(rasterize.begin(), rasterize.end(), 1) > 0) {
-      if (opt.rasterize_hit_maps) {
-        RasterizeHitMaps(*mesh, &views, &raster, &normals, &rasterize);
-      } else {
-        for (size_t v = 0; v < views.size(); ++v)
-          if (rasterize[v]) stats.times.intersect_s += CastHitMap(*scene, &views[v], &normals);
+    if (!opt.rasterize_hit_maps) {  // made anew by Embree instead
+      for (size_t v = 0; v < views.size(); ++v) {
+        if (update[v] != HitMapUpdate::kRasterize) continue;
+        stats.times.intersect_s += CastHitMap(*scene, &views[v], &normals);
+        update[v] = HitMapUpdate::kKeep;
       }
     }
+    UpdateHitMaps(*mesh, &views, &raster, &normals, update);
     if (!suns.empty() && (it == 0 || last)) {
       const auto ts = StageClock::now();
       MarkSunlight(*mesh, normals, suns, ctx.pairs, &views);

@@ -212,10 +212,10 @@ TEST(FollowHitMaps, PointsMoveWithTheirFacesCloseToAFreshRasterization) {
   EXPECT_GT(double(cos_close) / both, 0.95);
 }
 
-// pairs_per_iteration: an iteration updates only its pairs' views. A view left out keeps
-// its hit map as it was; one rasterized or followed through `only` gets what updating it
-// alone gives.
-TEST(RasterizeHitMaps, OnlyTheChosenViewsAreUpdated) {
+// pairs_per_iteration: an iteration updates only its pairs' views. A view kept keeps its
+// hit map as it was; one rasterized or followed through UpdateHitMaps gets what updating
+// it alone gives.
+TEST(UpdateHitMaps, OnlyTheChosenViewsAreUpdated) {
   const TriangleMesh mesh = BlockMesh(1.0);
   const RefineInput input =
       testing::MakePlaneInput(testing::Plane{}, {{25, 40}, {20, 200}}, mesh, 120, 0.5);
@@ -248,8 +248,8 @@ TEST(RasterizeHitMaps, OnlyTheChosenViewsAreUpdated) {
   for (auto& v : moved.vertices) v += Eigen::Vector3f(0.01f * v.y(), 0.0f, 0.3f + 0.02f * v.x());
   const auto moved_normals = FaceNormals(moved);
   RasterizeHitMaps(moved, &fresh, &scratch, &moved_normals);
-  const std::vector<char> first{1, 0}, second{0, 1};
-  RasterizeHitMaps(moved, &views, &scratch, &moved_normals, &first);
+  using U = HitMapUpdate;
+  UpdateHitMaps(moved, &views, &scratch, &moved_normals, {U::kRasterize, U::kKeep});
   EXPECT_TRUE(same(views[0].hit_map, fresh[0].hit_map));
   EXPECT_TRUE(same(views[1].hit_map, before[1].hit_map));
   EXPECT_FALSE(same(views[1].hit_map, fresh[1].hit_map));  // the move is seen
@@ -257,7 +257,7 @@ TEST(RasterizeHitMaps, OnlyTheChosenViewsAreUpdated) {
   std::vector<ViewLevel> followed = make_views();
   RasterizeHitMaps(mesh, &followed, &scratch, &normals);
   FollowHitMaps(moved, &followed, &scratch, &moved_normals);  // both, as the reference
-  FollowHitMaps(moved, &views, &scratch, &moved_normals, &second);
+  UpdateHitMaps(moved, &views, &scratch, &moved_normals, {U::kKeep, U::kFollow});
   EXPECT_TRUE(same(views[0].hit_map, fresh[0].hit_map));  // left as rasterized above
   EXPECT_TRUE(same(views[1].hit_map, followed[1].hit_map));
 }
