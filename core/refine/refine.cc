@@ -219,7 +219,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
       if (check_initial) {
         const auto t0 = StageClock::now();
         initial = InitialSurfaceAt(input, options, result->gsd_m, level);
-        initial_zncc = LevelZncc(input, views, result->pairs, options,
+        initial_zncc = LevelZncc(input, views, InitialCheckPairs(result->pairs, options), options,
                                  result->gsd_m * std::ldexp(1.0, level), level, initial,
                                  options.rasterize_hit_maps);
         check_s = SecondsSince(t0);
@@ -229,17 +229,20 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
     bool restarted = false;
     if (!RefineLevel(ctx, level, initial_zncc + kKeepMargin, &mesh, &stats)) {
       spdlog::info("level {}: the previous level's mean ZNCC {:.4f} does not beat the "
-                   "initial surface's {:.4f} by {}; restarting from the initial surface",
-                   level, stats.mean_zncc.front(), initial_zncc, kKeepMargin);
+                   "initial surface's {:.4f} by {} (over {} of {} pairs); restarting from the "
+                   "initial surface",
+                   level, stats.check_zncc, initial_zncc, kKeepMargin,
+                   InitialCheckPairs(result->pairs, options).size(), result->pairs.size());
       if (carry) mesh = reference;  // the initial surface remeshed for the level, unmoved
       else mesh = RemeshForLevel(std::move(initial), options, result->gsd_m, level, progress);
       RefineLevel(ctx, level, std::numeric_limits<double>::quiet_NaN(), &mesh, &stats);
       restarted = true;
     } else if (!std::isnan(initial_zncc)) {
-      check_initial = stats.mean_zncc.front() <= initial_zncc + kSkipCheckMargin;
-      spdlog::info("level {}: kept the previous level's result (initial surface: mean ZNCC "
-                   "{:.4f}, {:.1f} s to measure){}",
-                   level, initial_zncc, check_s,
+      check_initial = stats.check_zncc <= initial_zncc + kSkipCheckMargin;
+      spdlog::info("level {}: kept the previous level's result (mean ZNCC {:.4f}, the initial "
+                   "surface's {:.4f} over {} of {} pairs, {:.1f} s to measure){}",
+                   level, stats.check_zncc, initial_zncc,
+                   InitialCheckPairs(result->pairs, options).size(), result->pairs.size(), check_s,
                    check_initial ? "" : "; finer levels do not measure it again");
     }
     stats.initial_zncc = initial_zncc;

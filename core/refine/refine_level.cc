@@ -55,7 +55,8 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
                        const std::vector<Eigen::Vector3f>& normals,
                        const PhotometricOptions& options, std::vector<PassScratch>* scratch,
                        std::vector<Eigen::Vector3d>* gradient, std::vector<int>* seen,
-                       int one_direction = -1, std::vector<double>* information = nullptr) {
+                       int one_direction = -1, std::vector<double>* information = nullptr,
+                       std::vector<PairEnergy>* energies = nullptr) {
   // one_direction >= 0: pair k only as (i, j) if (one_direction + k) is even, else (j, i).
   std::vector<std::pair<int, int>> directions;
   for (size_t k = 0; k < pairs.size(); ++k) {
@@ -68,6 +69,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
   double sum = 0;
   long count = 0;
   if (scratch->size() < size_t(omp_get_max_threads())) scratch->resize(omp_get_max_threads());
+  if (energies) energies->assign(directions.size(), PairEnergy{});
 #pragma omp parallel
   {
     PassScratch& own = (*scratch)[omp_get_thread_num()];
@@ -82,6 +84,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
                                  accumulate ? &accumulator : nullptr, &workspace);
       sum += e.sum_zncc;
       count += e.num_windows;
+      if (energies) (*energies)[d] = e;
     }
     if (accumulate) {
 #pragma omp critical
@@ -174,6 +177,24 @@ std::vector<float> LevelHeightSigma(const RefineInput& input,
   return HeightSigmaFromInformation(information, MeanNoiseVariance(sources, level));
 }
 
+int PairGroups(int num_pairs, const RefineOptions& options) {
+  return options.pairs_per_iteration > 0
+             ? std::max(1, (num_pairs + options.pairs_per_iteration - 1) / options.pairs_per_iteration)
+             : 1;
+}
+
+std::vector<std::pair<int, int>> PairGroup(const std::vector<std::pair<int, int>>& pairs,
+                                           int groups, int group) {
+  std::vector<std::pair<int, int>> out;
+  for (size_t k = size_t(group); k < pairs.size(); k += size_t(groups)) out.push_back(pairs[k]);
+  return out;
+}
+
+std::vector<std::pair<int, int>> InitialCheckPairs(const std::vector<std::pair<int, int>>& pairs,
+                                                   const RefineOptions& options) {
+  return PairGroup(pairs, PairGroups(int(pairs.size()), options), 0);
+}
+
 bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, TriangleMesh* mesh,
                  LevelStats* stats_out) {
   const auto level_start = StageClock::now();
@@ -240,11 +261,9 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // group's step is a noisier one, and the surface ends where all pairs agree (the jax set
   // at 300 m, 39 pairs in 3 groups: roofs NMAD 0.058 m without, 0.054 m with, as with every
   // pair every iteration; docs/benchmarks-history.md, session 23).
-  const int num_pairs = int(ctx.pairs.size());
-  const int groups = opt.pairs_per_iteration > 0
-                         ? (num_pairs + opt.pairs_per_iteration - 1) / opt.pairs_per_iteration
-                         : 1;
+  const int groups = PairGroups(int(ctx.pairs.size()), opt);
   std::vector<std::pair<int, int>> group_pairs;
+  std::vector<PairEnergy> first_energies;  // the first iteration's, per pair-direction
   std::vector<HitMapUpdate> update(views.size());
   std::vector<int> made_at(views.size(), 0);
 
@@ -252,9 +271,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     ctx.progress.ThrowIfCancelled();
     const bool last = it == iterations;
     const bool grouped = groups > 1 && it > 0 && it < iterations - kEveryPairAtTheEnd;
-    group_pairs.clear();
-    for (int k = 0; k < num_pairs; ++k)
-      if (!grouped || k % groups == (it - 1) % groups) group_pairs.push_back(ctx.pairs[k]);
+    group_pairs = PairGroup(ctx.pairs, grouped ? groups : 1, grouped ? (it - 1) % groups : 0);
     // The group's views follow their faces (points moved with them), or are made anew.
     std::fill(update.begin(), update.end(), grouped ? HitMapUpdate::kKeep : HitMapUpdate::kFollow);
     for (const auto& [i, j] : group_pairs)
@@ -297,7 +314,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
                                         (it == 0 && (data_confidence || initial_prior)) ||
                                                 (last && level == 0)
                                             ? &information
-                                            : nullptr);
+                                            : nullptr,
+                                        it == 0 && groups > 1 ? &first_energies : nullptr);
     if (it == 0 && data_confidence)
       confidence = HeightConfidenceFromInformation(information, noise_variance, gsd, opt, &stats);
     if (it == 0 && initial_prior)
@@ -305,7 +323,20 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     stats.mean_zncc.push_back(zncc);
     stats.pair_directions += int(group_pairs.size()) * (half ? 1 : 2);
     stats.times.gradient_s += SecondsSince(t0);
-    if (it == 0 && zncc < abandon_below) return false;
+    if (it == 0) {
+      // Over the pairs the initial surface is measured on (InitialCheckPairs): pairs k and
+      // directions 2k, 2k + 1 of group 0.
+      stats.check_zncc = zncc;
+      if (groups > 1) {
+        double sum = 0;
+        long count = 0;
+        for (size_t k = 0; k < ctx.pairs.size(); k += size_t(groups))
+          for (size_t d : {2 * k, 2 * k + 1})
+            sum += first_energies[d].sum_zncc, count += first_energies[d].num_windows;
+        stats.check_zncc = count > 0 ? sum / double(count) : 0.0;
+      }
+      if (stats.check_zncc < abandon_below) return false;
+    }
     if (last) {
       // The finished surface's height sigma from the images (+inf: no image sees it).
       if (level == 0) mesh->height_sigma = HeightSigmaFromInformation(information, noise_variance);

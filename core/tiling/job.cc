@@ -58,20 +58,15 @@ int CentralTile(const JobPlan& plan) {
   return best;
 }
 
-// The biases are one shift per image: a central window of kBiasWindowCells^2 DSM cells
-// (0.64 Mpx at the DSM's cell; at 0.3 m, 240 m square) gives them as well as a whole
-// tile, at a fraction of the time (large jax scene, tile of 1539^2 cells: BENCHMARKS.md).
-constexpr int kBiasWindowCells = 800;
-
 // The window the job's biases are estimated over: centred on the AOI, whatever the
 // tiling, so that a job's biases (and with them its datum) do not change with the tile
-// size or the memory budget; at most kBiasWindowCells and at most `tile`'s padded size
+// size or the memory budget; at most window_cells and at most `tile`'s padded size
 // per side (the tiles fit the budget, so the window does). `tile` (the tile nearest the
 // AOI's centre) lends it the rest of a planned tile.
-PlannedTile BiasWindow(const JobPlan& plan, PlannedTile tile) {
+PlannedTile BiasWindow(const JobPlan& plan, PlannedTile tile, int window_cells) {
   const PixelWindow& a = plan.aoi_cells;
-  const int width = std::min({tile.padded_cells.width, kBiasWindowCells, plan.dsm.width});
-  const int height = std::min({tile.padded_cells.height, kBiasWindowCells, plan.dsm.height});
+  const int width = std::min({tile.padded_cells.width, window_cells, plan.dsm.width});
+  const int height = std::min({tile.padded_cells.height, window_cells, plan.dsm.height});
   const int col0 = std::clamp(a.col0 + (a.width - width) / 2, 0, plan.dsm.width - width);
   const int row0 = std::clamp(a.row0 + (a.height - height) / 2, 0, plan.dsm.height - height);
   tile.padded_cells = PixelWindow{col0, row0, width, height};
@@ -82,11 +77,12 @@ PlannedTile BiasWindow(const JobPlan& plan, PlannedTile tile) {
 }  // namespace
 
 std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPlan& plan,
-                                               int* tile_index, const Progress& progress) {
+                                               int* tile_index, const Progress& progress,
+                                               int window_cells) {
   SATMESH_CHECK(!plan.tiles.empty(), ErrorCode::kInvalidArgument, "bias: the plan has no tile");
   *tile_index = CentralTile(plan);
   JobPlan window_plan = plan;  // the central tile's middle, as a plan of one tile
-  window_plan.tiles = {BiasWindow(plan, plan.tiles[*tile_index])};
+  window_plan.tiles = {BiasWindow(plan, plan.tiles[*tile_index], window_cells)};
   const TileInput input = PrepareTileInput(spec, window_plan, 0);
   BiasOptions options;
   options.refine = spec.refine;
@@ -98,16 +94,22 @@ std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPla
   return bias;
 }
 
-JobBiases EstimateJobBiasesOnce(const JobSpec& spec, const JobPlan& plan, const Progress& progress) {
+JobBiases EstimateJobBiasesOnce(const JobSpec& spec, const JobPlan& plan, const Progress& progress,
+                                int window_cells) {
   JobBiases out;
-  if (plan.tiles.size() <= 1 || !spec.refine.estimate_bias) return out;
+  if (!spec.refine.estimate_bias || plan.tiles.empty()) return out;
+  // One tile within the window: its own estimate is the same, without reading it twice.
+  const PixelWindow& only = plan.tiles.front().padded_cells;
+  if (plan.tiles.size() == 1 && only.width <= window_cells && only.height <= window_cells)
+    return out;
   const auto t0 = StageClock::now();
   int index = 0;
   try {
-    out.bias_px = EstimateJobBiases(spec, plan, &index, progress);
+    out.bias_px = EstimateJobBiases(spec, plan, &index, progress, window_cells);
     out.tile = plan.tiles[index].Name();
-    spdlog::info("job: biases estimated once over the AOI's centre ({:.1f} s), used by all {} tiles",
-                 SecondsSince(t0), plan.tiles.size());
+    spdlog::info("job: biases estimated once over the AOI's centre ({:.1f} s), used by {} {}",
+                 SecondsSince(t0), plan.tiles.size() == 1 ? "the" : "all",
+                 plan.tiles.size() == 1 ? "tile" : std::to_string(plan.tiles.size()) + " tiles");
   } catch (const Error& e) {  // e.g. the central tile has no surface: each tile estimates
     if (e.code() == ErrorCode::kCancelled) throw;
     out.bias_px.clear();

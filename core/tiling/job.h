@@ -1,7 +1,7 @@
 #pragma once
 // The job's one tile pipeline, as the CLI (RunJob, in-process), the embedded server and
 // the queue's workers (server/) all run it:
-//   1. plan      PlanJob (tile_plan.h) + CheckJobInputs (input_check.h); tiled jobs with
+//   1. plan      PlanJob (tile_plan.h) + CheckJobInputs (input_check.h); with
 //                refine.estimate_bias: EstimateJobBiasesOnce, and every tile refines with
 //                TileSpec (the job's biases, not its own)
 //   2. tiles     RunTile (tile_run.h) for every planned tile: any order, any thread,
@@ -46,14 +46,23 @@ struct JobOutputs {
   double peak_rss_mb = 0;          // process peak resident memory at the end
 };
 
+// The biases are one shift per image: a central window of kBiasWindowCells^2 DSM cells
+// (0.64 Mpx at the DSM's cell; at 0.3 m, 240 m square) gives them as well as a whole
+// tile, at a fraction of the time (large jax scene, tile of 1539^2 cells: BENCHMARKS.md).
+// Smaller windows lose accuracy where few views match (multi-date 0.3 m, 6 views, biases
+// vs the truth with the datum fitted out: rms 0.081 px over 1160^2 and 800^2 cells, 0.100
+// over 640^2, 0.109 over 512^2; docs/benchmarks-history.md, session 24).
+constexpr int kBiasWindowCells = 800;
+
 // The job's per-image RPC biases, estimated once over a window centred on the AOI (at
-// most 800 x 800 DSM cells, and at most the padded size of the planned tile nearest the
+// most window_cells^2 DSM cells, and at most the padded size of the planned tile nearest the
 // AOI's centre, which fits the memory budget like every tile; *tile_index is that tile),
 // so that they do not depend on the tiling; in spec.images order, added to the spec's
 // biases; an image the window does not see keeps its bias. Throws like RunTile for that
 // window (Error; kCancelled when cancelled).
 std::vector<Eigen::Vector2d> EstimateJobBiases(const JobSpec& spec, const JobPlan& plan,
-                                               int* tile_index, const Progress& progress = {});
+                                               int* tile_index, const Progress& progress = {},
+                                               int window_cells = kBiasWindowCells);
 
 // Step 1b: the job's biases, estimated once over the AOI's centre (EstimateJobBiases).
 struct JobBiases {
@@ -61,9 +70,13 @@ struct JobBiases {
   std::string tile;                      // the tile nearest the AOI's centre (bounds the window)
   double seconds = 0;                    // their time (that tile's windows read included)
 };
-// Empty for a one-tile job, without refine.estimate_bias, or when the window cannot
-// give them (no surface, no pair; logged). Throws Error{kCancelled} when cancelled.
-JobBiases EstimateJobBiasesOnce(const JobSpec& spec, const JobPlan& plan, const Progress& progress = {});
+// Empty without refine.estimate_bias, for a one-tile job whose tile fits in the window
+// (it estimates its own over the same cells), or when the window cannot give them (no
+// surface, no pair; logged). A larger single tile takes them from the window too: the
+// 300 m jax scene's 1160^2-cell tile spent 28 of its 72 s on them, 19 s over the window.
+// Throws Error{kCancelled} when cancelled.
+JobBiases EstimateJobBiasesOnce(const JobSpec& spec, const JobPlan& plan, const Progress& progress = {},
+                                int window_cells = kBiasWindowCells);
 // The spec every tile refines with: the job's biases added to the images', estimate_bias
 // off; `spec` itself when there are none.
 JobSpec TileSpec(const JobSpec& spec, const JobBiases& biases);

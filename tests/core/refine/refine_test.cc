@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/refine/height_confidence.h"
+#include "core/refine/refine_level.h"
 #include "tests/core/refine/plane_scene.h"
 
 namespace satmesh {
@@ -197,6 +198,41 @@ TEST(Refine, RestartsFromTheInitialSurfaceWhenItExplainsTheImagesBetter) {
     EXPECT_TRUE(std::isnan(level.initial_zncc));
   }
   EXPECT_GT(PlaneError(chained.mesh, plane, 30).first, 0.5);  // still metres off
+}
+
+TEST(PairGroups, PairKIsInGroupKModGroupsAndTheCheckTakesGroupZero) {
+  std::vector<std::pair<int, int>> pairs;
+  for (int k = 0; k < 7; ++k) pairs.push_back({k, k + 1});
+  RefineOptions o;
+  o.pairs_per_iteration = 3;
+  EXPECT_EQ(PairGroups(7, o), 3);
+  EXPECT_EQ(PairGroup(pairs, 3, 1), (std::vector<std::pair<int, int>>{{1, 2}, {4, 5}}));
+  EXPECT_EQ(InitialCheckPairs(pairs, o), (std::vector<std::pair<int, int>>{{0, 1}, {3, 4}, {6, 7}}));
+  o.pairs_per_iteration = 7;  // one group: every pair
+  EXPECT_EQ(PairGroups(7, o), 1);
+  EXPECT_EQ(InitialCheckPairs(pairs, o), pairs);
+  o.pairs_per_iteration = 0;
+  EXPECT_EQ(InitialCheckPairs(pairs, o), pairs);
+}
+
+// With the pairs in groups, the initial surface is measured on group 0 alone and the
+// previous level's result compared on the same pairs: the restart is still found, and
+// after it the level's first iteration (the initial surface remeshed) measures what the
+// check measured.
+TEST(Refine, TheInitialSurfaceCheckComparesOnePairGroup) {
+  const testing::Plane plane;
+  const RefineInput input = PlaneWithInitialSurfaces(plane, /*coarse_off_m=*/3.0,
+                                                     /*finer_off_m=*/0.0);
+  RefineOptions o = SmallOptions();
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;
+  o.pairs_per_iteration = 1;  // 3 pairs: 3 groups, the check on the first pair only
+  const RefineResult result = Refine(input, o);
+  ASSERT_EQ(result.pairs.size(), 3u);
+  ASSERT_EQ(result.levels.size(), 3u);
+  EXPECT_TRUE(result.levels[1].restarted);
+  EXPECT_NEAR(result.levels[1].check_zncc, result.levels[1].initial_zncc, 0.02);
+  EXPECT_LT(PlaneError(result.mesh, plane, 30).first, 0.05);
 }
 
 // Once the chain beats the initial surface clearly (here: the chain starts exact, the

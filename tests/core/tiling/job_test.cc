@@ -237,6 +237,25 @@ TEST_F(TiledJob, BiasesDoNotDependOnTheTiling) {
   for (size_t i = 0; i < a.size(); ++i) EXPECT_LT((a[i] - b[i]).norm(), 1e-9) << i;
 }
 
+TEST_F(TiledJob, AOneTileJobLargerThanTheBiasWindowTakesItsBiasesFromTheWindow) {
+  // One tile: within the window it estimates its own (nothing read twice); larger, the
+  // job's biases come from the window at its centre, as for a tiled job.
+  JobSpec spec = Spec();
+  spec.refine.estimate_bias = true;
+  spec.tiling.tile_size_m = 1000;
+  const JobPlan plan = PlanJob(spec);
+  ASSERT_EQ(plan.tiles.size(), 1u);
+  const PixelWindow& padded = plan.tiles[0].padded_cells;
+  const int side = std::max(padded.width, padded.height);
+  EXPECT_TRUE(EstimateJobBiasesOnce(spec, plan, {}, side).bias_px.empty());
+  const JobBiases window = EstimateJobBiasesOnce(spec, plan, {}, side / 2);
+  ASSERT_EQ(window.bias_px.size(), spec.images.size());
+  EXPECT_EQ(window.tile, plan.tiles[0].Name());
+  EXPECT_GT(window.seconds, 0);
+  // The scene has no bias: the estimates from half the tile's side stay small.
+  for (const auto& b : window.bias_px) EXPECT_LT(b.norm(), 0.2) << b.transpose();
+}
+
 TEST_F(TiledJob, WhenTheBiasWindowHasNoSurfaceEachTileEstimatesItsOwn) {
   // The initial DSM's cells in the job's bias window (centred on the AOI, a padded tile's
   // size) and west of it as nodata: the job's biases cannot be estimated there.
