@@ -227,9 +227,14 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // creases are already zigzag approximations that depend on the remesher's every choice:
   // there the surface itself is smoothed (else the subdivision between levels follows the
   // zigzags: 6% more or fewer faces from the same mesh in another CRS).
+  // scale_dependent_umbrella: weights from the level's start, fixed for its iterations (the
+  // operator stays linear, as the offsets' smoothing needs).
+  const std::vector<float> umbrella_weights =
+      opt.scale_dependent_umbrella ? InverseLengthWeights(mesh->vertices, adjacency)
+                                   : std::vector<float>{};
   const std::vector<Eigen::Vector3f> start_u2 =
       level == 0 && opt.SmoothsOffsets(ctx.input.initial_is_mesh)
-          ? UmbrellaSquared(mesh->vertices, adjacency)
+          ? UmbrellaSquared(mesh->vertices, adjacency, &umbrella_weights)
           : std::vector<Eigen::Vector3f>{};
   const size_t nv = mesh->vertices.size();
   stats.num_vertices = int(nv);
@@ -344,7 +349,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     }
 
     t0 = StageClock::now();
-    std::vector<Eigen::Vector3f> u2 = UmbrellaSquared(mesh->vertices, adjacency);
+    std::vector<Eigen::Vector3f> u2 = UmbrellaSquared(mesh->vertices, adjacency, &umbrella_weights);
     if (!start_u2.empty())
       for (size_t v = 0; v < nv; ++v) u2[v] -= start_u2[v];
     stats.times.smoothness_s += SecondsSince(t0);

@@ -74,6 +74,10 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "departs from by more than that are subdivided, their new vertices put on it; 0: off"},
       {"remesh_coarse", &R::remesh_coarse, {},
        "isotropic remeshing of the coarse mesh; false: keep the input's triangles"},
+      {"scale_dependent_umbrella", &R::scale_dependent_umbrella, {},
+       "the thin plate's umbrella weighs each neighbour by 1 / edge length (fixed from each "
+       "level's start) instead of equally; with remesh_coarse false, a DSM grid's one-cell wall "
+       "strips then do not pull roof edges down"},
       {"restart_from_initial", &R::restart_from_initial, {},
        "below the coarsest level, continue from the initial surface unless the previous level's "
        "result matches the images better"},

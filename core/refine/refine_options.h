@@ -71,6 +71,9 @@ struct RefineOptions {
                                      // subdivided, their new vertices put on it
                                      // (refine.cc, LevelStartMesh); 0: off
   bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
+  bool scale_dependent_umbrella = false;  // the thin plate's umbrella weighs each neighbour
+                                          // by 1 / edge length (thin_plate.h), from the
+                                          // level's start
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous
                                      // level's result has a mean ZNCC higher by > 0.001

@@ -1,24 +1,48 @@
 #include "core/refine/thin_plate.h"
 
+#include <algorithm>
+
 namespace satmesh {
 
+std::vector<float> InverseLengthWeights(const std::vector<Eigen::Vector3f>& positions,
+                                        const VertexAdjacency& adjacency) {
+  std::vector<float> weights(adjacency.neighbors.size());
+#pragma omp parallel for schedule(static)
+  for (long v = 0; v < long(positions.size()); ++v)
+    for (int k = adjacency.neighbor_offsets[v]; k < adjacency.neighbor_offsets[v + 1]; ++k)
+      weights[k] = 1.f / std::max(1e-3f, (positions[adjacency.neighbors[k]] - positions[v]).norm());
+  return weights;
+}
+
 std::vector<Eigen::Vector3f> Umbrella(const std::vector<Eigen::Vector3f>& positions,
-                                      const VertexAdjacency& adjacency) {
+                                      const VertexAdjacency& adjacency,
+                                      const std::vector<float>* weights) {
+  const float* w = weights && !weights->empty() ? weights->data() : nullptr;
   std::vector<Eigen::Vector3f> out(positions.size(), Eigen::Vector3f::Zero());
 #pragma omp parallel for schedule(static)
   for (long v = 0; v < long(positions.size()); ++v) {
     const int begin = adjacency.neighbor_offsets[v], end = adjacency.neighbor_offsets[v + 1];
     if (end == begin) continue;
     Eigen::Vector3f mean = Eigen::Vector3f::Zero();
-    for (int k = begin; k < end; ++k) mean += positions[adjacency.neighbors[k]];
-    out[v] = mean / float(end - begin) - positions[v];
+    if (!w) {
+      for (int k = begin; k < end; ++k) mean += positions[adjacency.neighbors[k]];
+      out[v] = mean / float(end - begin) - positions[v];
+      continue;
+    }
+    float sum = 0;
+    for (int k = begin; k < end; ++k) {
+      mean += w[k] * positions[adjacency.neighbors[k]];
+      sum += w[k];
+    }
+    out[v] = mean / sum - positions[v];
   }
   return out;
 }
 
 std::vector<Eigen::Vector3f> UmbrellaSquared(const std::vector<Eigen::Vector3f>& positions,
-                                             const VertexAdjacency& adjacency) {
-  return Umbrella(Umbrella(positions, adjacency), adjacency);
+                                             const VertexAdjacency& adjacency,
+                                             const std::vector<float>* weights) {
+  return Umbrella(Umbrella(positions, adjacency, weights), adjacency, weights);
 }
 
 }  // namespace satmesh
