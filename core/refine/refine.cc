@@ -64,11 +64,19 @@ double LevelEdge(const RefineOptions& options, double gsd_m, int level) {
   return options.coarse_edge_px * gsd_m * std::ldexp(1.0, level);
 }
 
-// `mesh` remeshed isotropically to the triangle edge of `level`, unless
-// options.remesh_coarse is off.
-TriangleMesh RemeshForLevel(TriangleMesh mesh, const RefineOptions& options, double gsd_m,
-                            int level, const Progress& progress) {
-  if (!options.remesh_coarse) return mesh;
+// `mesh` remeshed isotropically to the triangle edge of `level`. With
+// options.remesh_coarse off: a DSM start's own grid with cells of that edge (block means),
+// else `mesh` as it is. (The initial mesh's cells are half the edge estimated from the DSM
+// cell before the GSD is known, CoarseCellSize: 1-pixel cells at the coarse level of a 0.3 m
+// job, whose roofs refine 8-13% worse than from 2-pixel cells, equal to the remesh's:
+// docs/benchmarks-history.md, session 24.)
+TriangleMesh RemeshForLevel(const RefineInput& input, TriangleMesh mesh,
+                            const RefineOptions& options, double gsd_m, int level,
+                            const Progress& progress) {
+  if (!options.remesh_coarse) {
+    if (input.initial_is_mesh || !input.initial_for_edge) return mesh;
+    return input.initial_for_edge(2 * LevelEdge(options, gsd_m, level));  // cells of one edge
+  }
   CoarseMeshOptions coarse;
   coarse.target_edge_m = LevelEdge(options, gsd_m, level);
   return RemeshIsotropic(mesh, coarse, progress);
@@ -98,7 +106,7 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
                           const Progress& progress, int level, double* median_sigma_m = nullptr) {
   if (median_sigma_m) *median_sigma_m = std::numeric_limits<double>::quiet_NaN();
   TriangleMesh mesh = RemeshForLevel(
-      level == options.levels ? input.initial_mesh : InitialSurfaceAt(input, options, gsd_m, level),
+      input, level == options.levels ? input.initial_mesh : InitialSurfaceAt(input, options, gsd_m, level),
       options, gsd_m, level, progress);
   if (level != 0 || !options.remesh_coarse || !(options.initial_detail_gsd > 0))
     return mesh;
@@ -234,7 +242,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                    level, stats.check_zncc, initial_zncc, kKeepMargin,
                    InitialCheckPairs(result->pairs, options).size(), result->pairs.size());
       if (carry) mesh = reference;  // the initial surface remeshed for the level, unmoved
-      else mesh = RemeshForLevel(std::move(initial), options, result->gsd_m, level, progress);
+      else mesh = RemeshForLevel(input, std::move(initial), options, result->gsd_m, level, progress);
       RefineLevel(ctx, level, std::numeric_limits<double>::quiet_NaN(), &mesh, &stats);
       restarted = true;
     } else if (!std::isnan(initial_zncc)) {

@@ -73,7 +73,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "height to worse than this many GSDs: faces of the coarse mesh the initial surface "
        "departs from by more than that are subdivided, their new vertices put on it; 0: off"},
       {"remesh_coarse", &R::remesh_coarse, {},
-       "isotropic remeshing of the coarse mesh; false: keep the input's triangles"},
+       "isotropic remeshing of the coarse mesh; false: a DSM start's own grid with cells of the "
+       "level's triangle edge, a mesh start's triangles as they are"},
       {"scale_dependent_umbrella", &R::scale_dependent_umbrella, {},
        "the thin plate's umbrella weighs each neighbour by 1 / edge length (fixed from each "
        "level's start) instead of equally; with remesh_coarse false, a DSM grid's one-cell wall "

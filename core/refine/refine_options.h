@@ -70,7 +70,8 @@ struct RefineOptions {
                                      // initial surface departs from by more than that are
                                      // subdivided, their new vertices put on it
                                      // (refine.cc, LevelStartMesh); 0: off
-  bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh (else keep the input)
+  bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh; false: a DSM
+                                   // start's own grid at the level's edge, a mesh start as it is
   bool scale_dependent_umbrella = false;  // the thin plate's umbrella weighs each neighbour
                                           // by 1 / edge length (thin_plate.h), from the
                                           // level's start

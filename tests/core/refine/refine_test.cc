@@ -169,6 +169,24 @@ TEST(Refine, PairsTakenInTurnConvergeAsEveryPairDoes) {
   }
 }
 
+// remesh_coarse off: a DSM start's coarse level is the DSM's own grid with cells of that
+// level's triangle edge (initial_for_edge at twice the edge), not the initial mesh's finer
+// cells.
+TEST(Refine, WithoutTheRemeshTheCoarseLevelIsTheGridAtItsEdge) {
+  const testing::Plane plane;
+  const RefineInput input = PlaneWithInitialSurfaces(plane, 0.0, 0.0);  // initial mesh: 1 m cells
+  RefineOptions o = SmallOptions();
+  o.remesh_coarse = false;
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;
+  const RefineResult result = Refine(input, o);
+  ASSERT_EQ(result.levels.size(), 3u);
+  const double edge_m = o.coarse_edge_px * result.gsd_m * 4;  // level 2
+  const TriangleMesh grid = testing::PlaneMesh(plane, 40, edge_m, 0.0);
+  EXPECT_EQ(result.levels[0].num_vertices, int(grid.num_vertices())) << edge_m;
+  EXPECT_LT(result.levels[0].num_vertices, int(input.initial_mesh.num_vertices()) / 4);
+}
+
 // The scale-dependent umbrella (weights 1 / edge length from each level's start)
 // converges as the uniform one does: a plane started 3 m off, remeshed (mean 0.046 vs
 // 0.045 m). (On the input's own 1 m grid at every level it converges worse, 0.18 vs 0.13
