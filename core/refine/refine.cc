@@ -195,6 +195,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                          MeanRelativePairInformation(result->pair_details, options),
                          result->gsd_m};
   bool check_initial = options.restart_from_initial;
+  const std::vector<std::pair<int, int>> check_pairs = InitialCheckPairs(result->pairs, options);
   const bool carry = options.CarriesCoarseLevels(input.initial_is_mesh);
   TriangleMesh reference;  // carry: the level's mesh before its iterations
   for (int level = options.levels; level >= 0; --level) {
@@ -227,7 +228,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
       if (check_initial) {
         const auto t0 = StageClock::now();
         initial = InitialSurfaceAt(input, options, result->gsd_m, level);
-        initial_zncc = LevelZncc(input, views, InitialCheckPairs(result->pairs, options), options,
+        initial_zncc = LevelZncc(input, views, check_pairs, options,
                                  result->gsd_m * std::ldexp(1.0, level), level, initial,
                                  options.rasterize_hit_maps);
         check_s = SecondsSince(t0);
@@ -239,8 +240,8 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
       spdlog::info("level {}: the previous level's mean ZNCC {:.4f} does not beat the "
                    "initial surface's {:.4f} by {} (over {} of {} pairs); restarting from the "
                    "initial surface",
-                   level, stats.check_zncc, initial_zncc, kKeepMargin,
-                   InitialCheckPairs(result->pairs, options).size(), result->pairs.size());
+                   level, stats.check_zncc, initial_zncc, kKeepMargin, check_pairs.size(),
+                   result->pairs.size());
       if (carry) mesh = reference;  // the initial surface remeshed for the level, unmoved
       else mesh = RemeshForLevel(input, std::move(initial), options, result->gsd_m, level, progress);
       RefineLevel(ctx, level, std::numeric_limits<double>::quiet_NaN(), &mesh, &stats);
@@ -249,8 +250,8 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
       check_initial = stats.check_zncc <= initial_zncc + kSkipCheckMargin;
       spdlog::info("level {}: kept the previous level's result (mean ZNCC {:.4f}, the initial "
                    "surface's {:.4f} over {} of {} pairs, {:.1f} s to measure){}",
-                   level, stats.check_zncc, initial_zncc,
-                   InitialCheckPairs(result->pairs, options).size(), result->pairs.size(), check_s,
+                   level, stats.check_zncc, initial_zncc, check_pairs.size(), result->pairs.size(),
+                   check_s,
                    check_initial ? "" : "; finer levels do not measure it again");
     }
     stats.initial_zncc = initial_zncc;

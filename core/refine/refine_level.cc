@@ -183,10 +183,19 @@ int PairGroups(int num_pairs, const RefineOptions& options) {
              : 1;
 }
 
+namespace {
+// The indices of the pairs in `group`: k with k mod groups == group.
+std::vector<size_t> PairGroupIndices(size_t num_pairs, int groups, int group) {
+  std::vector<size_t> out;
+  for (size_t k = size_t(group); k < num_pairs; k += size_t(groups)) out.push_back(k);
+  return out;
+}
+}  // namespace
+
 std::vector<std::pair<int, int>> PairGroup(const std::vector<std::pair<int, int>>& pairs,
                                            int groups, int group) {
   std::vector<std::pair<int, int>> out;
-  for (size_t k = size_t(group); k < pairs.size(); k += size_t(groups)) out.push_back(pairs[k]);
+  for (size_t k : PairGroupIndices(pairs.size(), groups, group)) out.push_back(pairs[k]);
   return out;
 }
 
@@ -329,13 +338,13 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     stats.pair_directions += int(group_pairs.size()) * (half ? 1 : 2);
     stats.times.gradient_s += SecondsSince(t0);
     if (it == 0) {
-      // Over the pairs the initial surface is measured on (InitialCheckPairs): pairs k and
-      // directions 2k, 2k + 1 of group 0.
+      // Over the pairs the initial surface is measured on (InitialCheckPairs, group 0):
+      // pair k's directions are 2k and 2k + 1.
       stats.check_zncc = zncc;
       if (groups > 1) {
         double sum = 0;
         long count = 0;
-        for (size_t k = 0; k < ctx.pairs.size(); k += size_t(groups))
+        for (size_t k : PairGroupIndices(ctx.pairs.size(), groups, 0))
           for (size_t d : {2 * k, 2 * k + 1})
             sum += first_energies[d].sum_zncc, count += first_energies[d].num_windows;
         stats.check_zncc = count > 0 ? sum / double(count) : 0.0;

@@ -24,15 +24,11 @@ std::vector<Eigen::Vector3f> Umbrella(const std::vector<Eigen::Vector3f>& positi
     const int begin = adjacency.neighbor_offsets[v], end = adjacency.neighbor_offsets[v + 1];
     if (end == begin) continue;
     Eigen::Vector3f mean = Eigen::Vector3f::Zero();
-    if (!w) {
-      for (int k = begin; k < end; ++k) mean += positions[adjacency.neighbors[k]];
-      out[v] = mean / float(end - begin) - positions[v];
-      continue;
-    }
-    float sum = 0;
+    float sum = 0;  // uniform: exactly the neighbour count, so the mean is the plain one
     for (int k = begin; k < end; ++k) {
-      mean += w[k] * positions[adjacency.neighbors[k]];
-      sum += w[k];
+      const float wk = w ? w[k] : 1.f;
+      mean += wk * positions[adjacency.neighbors[k]];
+      sum += wk;
     }
     out[v] = mean / sum - positions[v];
   }
