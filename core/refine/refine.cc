@@ -64,16 +64,16 @@ double LevelEdge(const RefineOptions& options, double gsd_m, int level) {
   return options.coarse_edge_px * gsd_m * std::ldexp(1.0, level);
 }
 
-// `mesh` remeshed isotropically to the triangle edge of `level`. With
-// options.remesh_coarse off: a DSM start's own grid with cells of that edge (block means),
-// else `mesh` as it is. (The initial mesh's cells are half the edge estimated from the DSM
+// `mesh` remeshed isotropically to the triangle edge of `level`. With options.grid_start
+// (resolved: ChooseCoarseStart): a DSM start's own grid with cells of that edge (block
+// means), else `mesh` as it is. (The initial mesh's cells are half the edge estimated from the DSM
 // cell before the GSD is known, CoarseCellSize: 1-pixel cells at the coarse level of a 0.3 m
 // job, whose roofs refine 8-13% worse than from 2-pixel cells, equal to the remesh's:
 // docs/benchmarks-history.md, session 24.)
 TriangleMesh RemeshForLevel(const RefineInput& input, TriangleMesh mesh,
                             const RefineOptions& options, double gsd_m, int level,
                             const Progress& progress) {
-  if (!options.remesh_coarse) {
+  if (options.grid_start > 0) {
     if (input.initial_is_mesh || !input.initial_for_edge) return mesh;
     return input.initial_for_edge(2 * LevelEdge(options, gsd_m, level));  // cells of one edge
   }
@@ -108,7 +108,7 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
   TriangleMesh mesh = RemeshForLevel(
       input, level == options.levels ? input.initial_mesh : InitialSurfaceAt(input, options, gsd_m, level),
       options, gsd_m, level, progress);
-  if (level != 0 || !options.remesh_coarse || !(options.initial_detail_gsd > 0))
+  if (level != 0 || options.grid_start > 0 || !(options.initial_detail_gsd > 0))
     return mesh;
   const double tolerance_m = options.initial_detail_gsd * gsd_m;
   std::vector<float> sigma = LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh);
@@ -132,6 +132,46 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
                "by more than {:.2f} m ({} faces)",
                double(*middle), subdivided, faces_before, tolerance_m, mesh.num_faces());
   return mesh;
+}
+
+// Step 4a, RefineOptions::grid_start -1: the coarse start of a DSM start. The DSM's own
+// grid at the levels' triangle edge (with the umbrella weighted by 1 / edge length) where
+// the images resolve the median vertex's height at full resolution to initial_detail_gsd:
+// there the images form the walls the grid lacks, better than from the remesh's walls
+// (multi-date 0.5 m s1 / s2: facades 37.8 / 33.2 -> 48.8 / 38.8%, roofs 0.210 / 0.230 ->
+// 0.200 / 0.223 m; docs/benchmarks-history.md, session 25). Else (a stereo pair, a
+// tri-stereo: 0.6-0.9 GSD on the grid, against 0.03-0.17 GSD for multi-date sets) the
+// remesh, which keeps the DSM's walls: one pass does not form them (stereo 0.5 m s1
+// facades 24.2% from the remesh, 19.1% from the grid). One pair never takes the grid: the
+// two views of a pass see the walls of at most two sides, and on the real Pléiades pair
+// 01-03 (0.24 GSD on the grid, within the tolerance) the grid left the held-out view's
+// pairs' ZNCC 0.0017 / 0.0014 lower than the remesh. The test measures the level-0
+// grid through the initial check's pairs (InitialCheckPairs: a third of the jax set's 39
+// pairs, 1.4 s on its 300 m tile). Returns 1 for the grid, 0 for the remesh; `grid`: that
+// grid where it is the start of a job without coarser levels.
+int ChooseCoarseStart(const RefineInput& input, const RefineOptions& options,
+                      const std::vector<PreparedView>& views,
+                      const std::vector<std::pair<int, int>>& pairs, double gsd_m,
+                      std::optional<TriangleMesh>* grid) {
+  if (options.grid_start >= 0) return options.grid_start;
+  if (input.initial_is_mesh || !input.initial_for_edge || !(options.initial_detail_gsd > 0) ||
+      pairs.size() < 2)
+    return 0;
+  TriangleMesh mesh = input.initial_for_edge(2 * LevelEdge(options, gsd_m, 0));
+  std::vector<float> sigma =
+      LevelHeightSigma(input, views, InitialCheckPairs(pairs, options), options, gsd_m, 0, mesh);
+  if (sigma.empty()) return 0;
+  const auto middle = sigma.begin() + long(sigma.size() / 2);
+  std::nth_element(sigma.begin(), middle, sigma.end());  // +inf (unseen) sorts last
+  const double tolerance_m = options.initial_detail_gsd * gsd_m;
+  const bool resolves = *middle <= tolerance_m;
+  spdlog::info("refine: the images resolve the DSM's grid at full resolution to {:.2f} m "
+               "(median vertex, {}within {:.2f} m): the coarse mesh is {}",
+               double(*middle), resolves ? "" : "not ", tolerance_m,
+               resolves ? "the DSM's grid, the images form the walls"
+                        : "the DSM mesh remeshed, its walls kept");
+  if (resolves && options.levels == 0) *grid = std::move(mesh);
+  return resolves ? 1 : 0;
 }
 
 // Step 2: the pairs, or an error that says why there is none.
@@ -363,6 +403,9 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
   //    docs/benchmarks-history.md, session 21), while a stereo or tri-stereo pass (1.5-3.7
   //    GSD) corrects a smooth error only with it.
   std::optional<TriangleMesh> level0_start;
+  options.grid_start =
+      ChooseCoarseStart(input, options, views, result.pairs, result.gsd_m, &level0_start);
+  result.grid_start = options.grid_start;
   if (user_options.levels < 0 && options.levels == 1 &&
       options.CarriesCoarseLevels(input.initial_is_mesh) &&
       ResolveLevels(user_options, result.gsd_m, input.initial_cell_m, false) == 0) {

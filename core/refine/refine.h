@@ -78,6 +78,8 @@ struct RefineResult {
   double bias_s = 0;
   std::vector<LevelStats> levels;      // coarse to fine (options.levels resolved: ResolveLevels)
   double gsd_m = 0;                    // full-resolution GSD
+  int grid_start = 0;                  // the coarse start taken (RefineOptions::grid_start
+                                       // resolved: 1 the DSM's grid, 0 the remesh)
   // The mean share of the vertices' offsets from the initial surface undone by the last
   // step (RefineOptions::keep_initial_sigmas; 0: off or nothing undone).
   double kept_initial_share = 0;

@@ -236,11 +236,11 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // creases are already zigzag approximations that depend on the remesher's every choice:
   // there the surface itself is smoothed (else the subdivision between levels follows the
   // zigzags: 6% more or fewer faces from the same mesh in another CRS).
-  // scale_dependent_umbrella: weights from the level's start, fixed for its iterations (the
-  // operator stays linear, as the offsets' smoothing needs).
+  // grid_start: the umbrella's weights (1 / edge length) from the level's start, fixed for
+  // its iterations (the operator stays linear, as the offsets' smoothing needs).
   const std::vector<float> umbrella_weights =
-      opt.scale_dependent_umbrella ? InverseLengthWeights(mesh->vertices, adjacency)
-                                   : std::vector<float>{};
+      opt.grid_start > 0 ? InverseLengthWeights(mesh->vertices, adjacency)
+                         : std::vector<float>{};
   const std::vector<Eigen::Vector3f> start_u2 =
       level == 0 && opt.SmoothsOffsets(ctx.input.initial_is_mesh)
           ? UmbrellaSquared(mesh->vertices, adjacency, &umbrella_weights)

@@ -72,13 +72,12 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "a full-resolution start (no coarser level) whose images resolve the median vertex's "
        "height to worse than this many GSDs: faces of the coarse mesh the initial surface "
        "departs from by more than that are subdivided, their new vertices put on it; 0: off"},
-      {"remesh_coarse", &R::remesh_coarse, {},
-       "isotropic remeshing of the coarse mesh; false: a DSM start's own grid with cells of the "
-       "level's triangle edge, a mesh start's triangles as they are"},
-      {"scale_dependent_umbrella", &R::scale_dependent_umbrella, {},
-       "the thin plate's umbrella weighs each neighbour by 1 / edge length (fixed from each "
-       "level's start) instead of equally; with remesh_coarse false, a DSM grid's one-cell wall "
-       "strips then do not pull roof edges down"},
+      {"grid_start", &R::grid_start, Range::In(-1, 1),
+       "the coarse mesh of a DSM start: 1: the DSM's own grid at the level's triangle edge, the "
+       "thin plate's umbrella weighing each neighbour by 1 / edge length, so the images form the "
+       "walls (a mesh start: its triangles as they are); 0: isotropic remesh of the DSM mesh "
+       "(its walls kept); -1: the grid where the images resolve the median vertex's height at "
+       "full resolution to initial_detail_gsd, else the remesh"},
       {"restart_from_initial", &R::restart_from_initial, {},
        "below the coarsest level, continue from the initial surface unless the previous level's "
        "result matches the images better"},

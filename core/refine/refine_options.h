@@ -70,11 +70,17 @@ struct RefineOptions {
                                      // initial surface departs from by more than that are
                                      // subdivided, their new vertices put on it
                                      // (refine.cc, LevelStartMesh); 0: off
-  bool remesh_coarse = true;       // isotropic remeshing of the coarse mesh; false: a DSM
-                                   // start's own grid at the level's edge, a mesh start as it is
-  bool scale_dependent_umbrella = false;  // the thin plate's umbrella weighs each neighbour
-                                          // by 1 / edge length (thin_plate.h), from the
-                                          // level's start
+  int grid_start = -1;             // the coarse mesh of a DSM start: 1: the DSM's own grid
+                                   // at the level's triangle edge, the thin plate's
+                                   // umbrella weighing each neighbour by 1 / edge length
+                                   // (thin_plate.h), so the images, not the grid's one-cell
+                                   // wall strips, form the walls (a mesh start: its
+                                   // triangles as they are, the same umbrella); 0: CGAL's
+                                   // isotropic remesh of the DSM mesh, whose walls are kept;
+                                   // -1: the grid where the images resolve the median
+                                   // vertex's height at full resolution to
+                                   // initial_detail_gsd (multi-date sets), else the remesh
+                                   // (stereo, tri-stereo; refine.cc, ChooseCoarseStart)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous
                                      // level's result has a mean ZNCC higher by > 0.001

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <random>
 
 #include "core/refine/height_confidence.h"
 #include "core/refine/refine_level.h"
@@ -109,7 +110,7 @@ TEST(Refine, SmoothingTheOffsetsKeepsAMeshStartsCreases) {
   RefineOptions o = SmallOptions();
   o.levels = 0;
   o.alpha = 0;
-  o.remesh_coarse = false;
+  o.grid_start = 1;  // the mesh's triangles as they are
   o.initial_sigma_gsd = 0;
   o.keep_initial_sigmas = 0;
   o.register_to_initial = 0;
@@ -169,42 +170,77 @@ TEST(Refine, PairsTakenInTurnConvergeAsEveryPairDoes) {
   }
 }
 
-// remesh_coarse off: a DSM start's coarse level is the DSM's own grid with cells of that
+// grid_start 1: a DSM start's coarse level is the DSM's own grid with cells of that
 // level's triangle edge (initial_for_edge at twice the edge), not the initial mesh's finer
 // cells.
-TEST(Refine, WithoutTheRemeshTheCoarseLevelIsTheGridAtItsEdge) {
+TEST(Refine, TheGridStartsCoarseLevelIsTheGridAtItsEdge) {
   const testing::Plane plane;
   const RefineInput input = PlaneWithInitialSurfaces(plane, 0.0, 0.0);  // initial mesh: 1 m cells
   RefineOptions o = SmallOptions();
-  o.remesh_coarse = false;
+  o.grid_start = 1;
   o.iterations_per_level = 1;
   o.coarsest_iterations_factor = 1;
   const RefineResult result = Refine(input, o);
   ASSERT_EQ(result.levels.size(), 3u);
+  EXPECT_EQ(result.grid_start, 1);
   const double edge_m = o.coarse_edge_px * result.gsd_m * 4;  // level 2
   const TriangleMesh grid = testing::PlaneMesh(plane, 40, edge_m, 0.0);
   EXPECT_EQ(result.levels[0].num_vertices, int(grid.num_vertices())) << edge_m;
   EXPECT_LT(result.levels[0].num_vertices, int(input.initial_mesh.num_vertices()) / 4);
 }
 
-// The scale-dependent umbrella (weights 1 / edge length from each level's start)
-// converges as the uniform one does: a plane started 3 m off, remeshed (mean 0.046 vs
-// 0.045 m). (On the input's own 1 m grid at every level it converges worse, 0.18 vs 0.13
-// m: docs/benchmarks-history.md, session 24.)
-TEST(Refine, ScaleDependentUmbrellaConvergesAsTheUniformOneDoes) {
+// The grid start (the DSM's grid at each level's edge, the umbrella weighted by 1 / edge
+// length) converges as the remesh does: a plane whose initial surfaces are 3 m (6 GSD) off.
+TEST(Refine, TheGridStartConvergesAsTheRemeshDoes) {
   const testing::Plane plane;
-  const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
-                                             testing::PlaneMesh(plane, 40, 1.0, 3.0));
-  RefineOptions uniform = SmallOptions(), weighted = SmallOptions();
-  weighted.scale_dependent_umbrella = true;
-  const RefineResult a = Refine(input, uniform), b = Refine(input, weighted);
+  const RefineInput input = PlaneWithInitialSurfaces(plane, 3.0, 3.0);
+  RefineOptions remesh = SmallOptions(), grid = SmallOptions();
+  remesh.grid_start = 0;
+  grid.grid_start = 1;
+  const RefineResult a = Refine(input, remesh), b = Refine(input, grid);
   const auto [mean_a, p95_a] = PlaneError(a.mesh, plane, 30);
   const auto [mean_b, p95_b] = PlaneError(b.mesh, plane, 30);
-  std::printf("uniform: mean %.4f p95 %.4f m; scale-dependent: mean %.4f p95 %.4f m\n", mean_a,
-              p95_a, mean_b, p95_b);
+  std::printf("remesh: mean %.4f p95 %.4f m; grid: mean %.4f p95 %.4f m\n", mean_a, p95_a,
+              mean_b, p95_b);
   EXPECT_LT(mean_b, 0.1);
   EXPECT_LT(p95_b, 0.25);
   EXPECT_LT(mean_b, 1.2 * mean_a + 0.005);
+}
+
+// grid_start -1 takes the grid where the images resolve the median vertex's height at full
+// resolution to initial_detail_gsd through more than one pair, the remesh elsewhere: the
+// plane's three views (pairs at 10-16 degrees, noise-free texture) resolve it; three views
+// of one pass (pairs at 5-14 degrees) whose images carry noise of a fifth of the texture's
+// range do not; one pair of the noise-free views never takes the grid.
+TEST(Refine, TheGridStartIsTakenWhereTheImagesResolveTheSurface) {
+  const testing::Plane plane;
+  RefineOptions o = SmallOptions();
+  o.levels = 0;
+  o.iterations_per_level = 1;
+  ASSERT_EQ(o.grid_start, -1);
+  const RefineInput resolved = PlaneWithInitialSurfaces(plane, 0.0, 0.0);
+  const RefineResult three = Refine(resolved, o);
+  ASSERT_EQ(three.pairs.size(), 3u);
+  EXPECT_EQ(three.grid_start, 1);
+
+  RefineInput noisy = resolved;
+  const std::vector<testing::ViewSpec> one_pass = {{3, 0}, {8, 0}, {6, 180}};
+  std::mt19937 rng(7);
+  std::normal_distribution<float> noise(0.f, 300.f);  // texture: 1500 DN of range
+  for (size_t v = 0; v < one_pass.size(); ++v) {
+    noisy.views[v].rpc = testing::AffineRpc(noisy.frame, one_pass[v], 0.5, 200);
+    noisy.views[v].image = testing::RenderPlane(noisy.views[v].rpc, noisy.frame, plane, 200);
+    for (float& px : noisy.views[v].image.pixels) px += noise(rng);
+  }
+  const RefineResult not_resolved = Refine(noisy, o);
+  ASSERT_EQ(not_resolved.pairs.size(), 3u);
+  EXPECT_EQ(not_resolved.grid_start, 0);
+
+  RefineInput two = resolved;
+  two.views.resize(2);
+  const RefineResult one_pair = Refine(two, o);
+  ASSERT_EQ(one_pair.pairs.size(), 1u);
+  EXPECT_EQ(one_pair.grid_start, 0);
 }
 
 // A level below the coarsest restarts from the initial surface when that explains the
@@ -218,6 +254,7 @@ TEST(Refine, RestartsFromTheInitialSurfaceWhenItExplainsTheImagesBetter) {
   RefineOptions o = SmallOptions();
   o.iterations_per_level = 1;
   o.coarsest_iterations_factor = 1;  // one iteration at every level, the coarsest too
+  o.grid_start = 0;  // the coarse start from initial_mesh (the grid's is initial_for_edge's)
   const RefineResult result = Refine(input, o);
   ASSERT_EQ(result.levels.size(), 3u);
   EXPECT_TRUE(std::isnan(result.levels[0].initial_zncc));  // the coarsest: nothing to compare
