@@ -177,6 +177,7 @@ int RunBench(const std::vector<std::string>& argv) {
   for (const StereoPair& p : refine.pair_details)
     std::printf(" %d-%d %.1f deg score %.2f;", p.i, p.j, p.angle_deg, p.score);
   std::printf("\n");
+  std::printf("coarse start: %s\n", refine.grid_start > 0 ? "the DSM's grid" : "the remesh");
   const RaycastTiming ray = TimeRaycast(input.refine, refine.mesh, {used.begin(), used.end()},
                                         /*level=*/0, spec.refine.virtual_camera_grid_px,
                                         args.GetInt("repeats", 3));

@@ -183,10 +183,15 @@ TEST_F(TiledJob, AFailingTileIsReportedAndTheOthersFinish) {
   EXPECT_EQ(again.faces, o.assembly.faces);
   EXPECT_EQ(again.tileset.region, o.assembly.tileset.region);
   EXPECT_EQ(again.tiles_failed, 2);
-  for (const auto& t : restored)
+  for (size_t i = 0; i < restored.size(); ++i) {
+    const TileResult& t = restored[i];
     if (!t.ok) {
       EXPECT_EQ(t.error_code, ErrorCode::kInvalidInput) << t.name;
+    } else {  // the coarse start the tile took (grid_start -1: the grid or the remesh)
+      EXPECT_EQ(t.refine.grid_start, o.tiles[i].refine.grid_start) << t.name;
+      EXPECT_EQ(metrics["tiles"][i]["coarse_start"], t.refine.grid_start ? "grid" : "remesh");
     }
+  }
   // The pipeline's assembly step from the restored results (what the server and the
   // queue's workers call): the same outputs.
   const JobOutputs assembled = AssembleJob(o.plan, restored, out);
