@@ -148,18 +148,21 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
 // pairs' ZNCC 0.0017 / 0.0014 lower than the remesh. The test measures the level-0
 // grid through the initial check's pairs (InitialCheckPairs: a third of the jax set's 39
 // pairs, 1.4 s on its 300 m tile). Returns 1 for the grid, 0 for the remesh; `grid`: that
-// grid where it is the start of a job without coarser levels.
+// grid where it is the start of a job without coarser levels; `grid_zncc`: where the grid
+// is taken, its mean ZNCC over those pairs, which level 0's initial-surface check compares
+// with (the grid is what a restart there starts from).
 int ChooseCoarseStart(const RefineInput& input, const RefineOptions& options,
                       const std::vector<PreparedView>& views,
                       const std::vector<std::pair<int, int>>& pairs, double gsd_m,
-                      std::optional<TriangleMesh>* grid) {
+                      std::optional<TriangleMesh>* grid, double* grid_zncc) {
   if (options.grid_start >= 0) return options.grid_start;
   if (input.initial_is_mesh || !input.initial_for_edge || !(options.initial_detail_gsd > 0) ||
       pairs.size() < 2)
     return 0;
   TriangleMesh mesh = input.initial_for_edge(2 * LevelEdge(options, gsd_m, 0));
-  std::vector<float> sigma =
-      LevelHeightSigma(input, views, InitialCheckPairs(pairs, options), options, gsd_m, 0, mesh);
+  LevelMeasure measure =
+      MeasureLevel(input, views, InitialCheckPairs(pairs, options), options, gsd_m, 0, mesh);
+  std::vector<float>& sigma = measure.height_sigma;
   if (sigma.empty()) return 0;
   const auto middle = sigma.begin() + long(sigma.size() / 2);
   std::nth_element(sigma.begin(), middle, sigma.end());  // +inf (unseen) sorts last
@@ -171,6 +174,7 @@ int ChooseCoarseStart(const RefineInput& input, const RefineOptions& options,
                resolves ? "the DSM's grid, the images form the walls"
                         : "the DSM mesh remeshed, its walls kept");
   if (resolves && options.levels == 0) *grid = std::move(mesh);
+  if (resolves && options.rasterize_hit_maps) *grid_zncc = measure.mean_zncc;  // as the check
   return resolves ? 1 : 0;
 }
 
@@ -221,8 +225,10 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 // roofs 0.430 -> 0.323 m, the DSM start 0.350 m; docs/benchmarks-history.md, session 21).
 void CoarseToFine(const RefineInput& input, const RefineOptions& options,
                   const Progress& progress, const std::vector<PreparedView>& views,
-                  RefineResult* result, std::optional<TriangleMesh> level0_start) {
-  // level0_start: LevelStartMesh at level 0, made already.
+                  RefineResult* result, std::optional<TriangleMesh> level0_start,
+                  double level0_initial_zncc) {
+  // level0_start: LevelStartMesh at level 0, made already. level0_initial_zncc: the initial
+  // surface's mean ZNCC at level 0 over the check's pairs, measured already (NaN: not).
   TriangleMesh mesh =
       options.levels == 0 && level0_start
           ? std::move(*level0_start)
@@ -265,7 +271,11 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
       reference = mesh;
     }
     if (level < options.levels) {
-      if (check_initial) {
+      if (check_initial && level == 0 && !std::isnan(level0_initial_zncc)) {
+        // measured by ChooseCoarseStart on the level-0 grid, which a restart starts from
+        // (RemeshForLevel): `initial` is not needed
+        initial_zncc = level0_initial_zncc;
+      } else if (check_initial) {
         const auto t0 = StageClock::now();
         initial = InitialSurfaceAt(input, options, result->gsd_m, level);
         initial_zncc = LevelZncc(input, views, check_pairs, options,
@@ -403,8 +413,9 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
   //    docs/benchmarks-history.md, session 21), while a stereo or tri-stereo pass (1.5-3.7
   //    GSD) corrects a smooth error only with it.
   std::optional<TriangleMesh> level0_start;
-  options.grid_start =
-      ChooseCoarseStart(input, options, views, result.pairs, result.gsd_m, &level0_start);
+  double level0_initial_zncc = std::numeric_limits<double>::quiet_NaN();
+  options.grid_start = ChooseCoarseStart(input, options, views, result.pairs, result.gsd_m,
+                                         &level0_start, &level0_initial_zncc);
   result.grid_start = options.grid_start;
   if (user_options.levels < 0 && options.levels == 1 &&
       options.CarriesCoarseLevels(input.initial_is_mesh) &&
@@ -419,7 +430,8 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
                    median_sigma_m, kCarriedLevelSigmaGsd);
     }
   }
-  CoarseToFine(input, options, progress, views, &result, std::move(level0_start));
+  CoarseToFine(input, options, progress, views, &result, std::move(level0_start),
+               level0_initial_zncc);
 
   // 5. The initial surface kept where the images do not contradict it beyond their noise.
   KeepInitialWithinNoise(input, options, &result);

@@ -177,6 +177,18 @@ std::vector<float> LevelHeightSigma(const RefineInput& input,
   return HeightSigmaFromInformation(information, MeanNoiseVariance(sources, level));
 }
 
+LevelMeasure MeasureLevel(const RefineInput& input, const std::vector<PreparedView>& sources,
+                          const std::vector<std::pair<int, int>>& pairs,
+                          const RefineOptions& options, double level_gsd_m, int level,
+                          const TriangleMesh& mesh) {
+  std::vector<double> information;
+  LevelMeasure out;
+  out.mean_zncc = MeasurePass(input, sources, pairs, options, level_gsd_m, level, mesh,
+                              /*rasterize=*/true, &information, /*sunlit=*/true);
+  out.height_sigma = HeightSigmaFromInformation(information, MeanNoiseVariance(sources, level));
+  return out;
+}
+
 int PairGroups(int num_pairs, const RefineOptions& options) {
   return options.pairs_per_iteration > 0
              ? std::max(1, (num_pairs + options.pairs_per_iteration - 1) / options.pairs_per_iteration)

@@ -61,4 +61,15 @@ std::vector<float> LevelHeightSigma(const RefineInput& input,
                                     const RefineOptions& options, double level_gsd_m, int level,
                                     const TriangleMesh& mesh);
 
+// Both from one rasterized pass: LevelHeightSigma, and the mean ZNCC as LevelZncc measures
+// it (moving shadows left out as the level's iterations leave them out, sunlit_pairs).
+struct LevelMeasure {
+  std::vector<float> height_sigma;
+  double mean_zncc = 0;
+};
+LevelMeasure MeasureLevel(const RefineInput& input, const std::vector<PreparedView>& sources,
+                          const std::vector<std::pair<int, int>>& pairs,
+                          const RefineOptions& options, double level_gsd_m, int level,
+                          const TriangleMesh& mesh);
+
 }  // namespace satmesh

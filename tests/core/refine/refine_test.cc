@@ -243,6 +243,29 @@ TEST(Refine, TheGridStartIsTakenWhereTheImagesResolveTheSurface) {
   EXPECT_EQ(one_pair.grid_start, 0);
 }
 
+// Where the grid start is taken, level 0's initial-surface check compares with the level-0
+// grid's ZNCC that ChooseCoarseStart measured (the grid a restart there starts from) instead
+// of measuring the initial surface again; the levels above measure it as before.
+TEST(Refine, TheGridStartsLevelZeroCheckReusesTheChoicesMeasurement) {
+  const testing::Plane plane;
+  const RefineInput input = PlaneWithInitialSurfaces(plane, 0.0, 0.0);
+  RefineOptions o = SmallOptions();
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;
+  const RefineResult result = Refine(input, o);
+  ASSERT_EQ(result.grid_start, 1);
+  ASSERT_EQ(result.levels.size(), 3u);
+  const LevelStats& level1 = result.levels[1];
+  const LevelStats& level0 = result.levels[2];
+  ASSERT_FALSE(std::isnan(level1.initial_zncc));
+  EXPECT_GT(level1.initial_check_s, 0.0);
+  ASSERT_FALSE(std::isnan(level0.initial_zncc));
+  EXPECT_EQ(level0.initial_check_s, 0.0);
+  const TriangleMesh grid = input.initial_for_edge(2 * o.coarse_edge_px * result.gsd_m);
+  const double measured = MeasureMeanZncc(input, grid, result.pairs, 0, o);  // Embree
+  EXPECT_NEAR(level0.initial_zncc, measured, 0.005);
+}
+
 // A level below the coarsest restarts from the initial surface when that explains the
 // images better than the previous level's result. Here the coarse start (initial_mesh) is
 // 3 m (6 GSD) off, one iteration per level cannot bring it back, and the surface for the
