@@ -147,10 +147,10 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
 // 01-03 (0.24 GSD on the grid, within the tolerance) the grid left the held-out view's
 // pairs' ZNCC 0.0017 / 0.0014 lower than the remesh. The test measures the level-0
 // grid through the initial check's pairs (InitialCheckPairs: a third of the jax set's 39
-// pairs, 1.4 s on its 300 m tile). Returns 1 for the grid, 0 for the remesh; `grid`: that
-// grid where it is the start of a job without coarser levels; `grid_zncc`: where the grid
-// is taken, its mean ZNCC over those pairs, which level 0's initial-surface check compares
-// with (the grid is what a restart there starts from).
+// pairs: 1.8 s on its 300 m tile, 3.6-6.2 s a large-job tile). Returns 1 for the grid, 0
+// for the remesh; `grid`: that grid where it is the start of a job without coarser levels;
+// `grid_zncc`: where the grid is taken, its mean ZNCC over those pairs, which level 0's
+// initial-surface check compares with (the grid is what a restart there starts from).
 int ChooseCoarseStart(const RefineInput& input, const RefineOptions& options,
                       const std::vector<PreparedView>& views,
                       const std::vector<std::pair<int, int>>& pairs, double gsd_m,
