@@ -1,5 +1,6 @@
 #include "tests/core/refine/plane_scene.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/refine/virtual_camera.h"
@@ -117,5 +118,42 @@ RefineInput MakePlaneInput(const Plane& plane, const std::vector<ViewSpec>& view
 }
 
 std::vector<ViewSpec> DefaultViews() { return {{3, 0}, {10, 90}, {8, 200}}; }
+
+std::pair<double, double> PlaneError(const TriangleMesh& mesh, const Plane& plane, double half) {
+  std::vector<double> errors;
+  for (const auto& v : mesh.vertices) {
+    if (std::abs(v.x()) > half || std::abs(v.y()) > half) continue;
+    errors.push_back(std::abs(v.z() - plane.Z(v.x(), v.y())));
+  }
+  if (errors.empty()) return {1e9, 1e9};
+  double sum = 0;
+  for (double e : errors) sum += e;
+  std::sort(errors.begin(), errors.end());
+  return {sum / errors.size(), errors[size_t(0.95 * (errors.size() - 1))]};
+}
+
+RefineOptions SmallOptions() {
+  RefineOptions o;
+  o.levels = 2;
+  o.iterations_per_level = 15;
+  o.estimate_bias = false;
+  return o;
+}
+
+RefineOptions SmallOptionsTwoPairs() {
+  RefineOptions o = SmallOptions();
+  o.pairs.max_angle_deg = 13;
+  o.pairs.optimal_angle_deg = 13;
+  o.noise_variance_factor = 0;
+  return o;
+}
+
+RefineInput PlaneWithInitialSurfaces(const Plane& plane, double coarse_off_m, double finer_off_m) {
+  RefineInput input = MakePlaneInput(plane, DefaultViews(), PlaneMesh(plane, 40, 1.0, coarse_off_m));
+  input.initial_for_edge = [plane, finer_off_m](double edge_m) {
+    return PlaneMesh(plane, 40, 0.5 * edge_m, finer_off_m);
+  };
+  return input;
+}
 
 }  // namespace satmesh::testing

@@ -1,6 +1,7 @@
 #pragma once
 // Tiny test scenes for the refinement: a textured tilted plane seen by a few views with
 // affine RPCs (exact RFMs, so rendering and refinement share one camera model).
+#include <utility>
 #include <vector>
 
 #include "core/refine/refine.h"
@@ -37,5 +38,25 @@ RefineInput MakePlaneInput(const Plane& plane, const std::vector<ViewSpec>& view
                            const TriangleMesh& initial, int size_px = 200, double gsd_m = 0.5);
 
 std::vector<ViewSpec> DefaultViews();
+
+// Helpers of the refinement's tests on the plane (refine_test.cc, level_start_test.cc).
+
+// Mean and 95th percentile of |z - plane| over vertices in the interior |x|,|y| < half.
+std::pair<double, double> PlaneError(const TriangleMesh& mesh, const Plane& plane, double half);
+
+// The plane scenes' RPCs are exact and their initial surfaces are metres off on purpose:
+// a bias estimated over such a surface would absorb part of the offset.
+RefineOptions SmallOptions();
+
+// The two pairs of DefaultViews within 13 degrees (10.4 and 10.9 degrees), without the
+// 16-degree one the default selection adds: tests of the level logic and of the hit maps
+// whose tolerances were set on that pair set, after one iteration per level.
+// The plane's texture is noise-free: its near-Nyquist waves would read as noise and
+// raise the ZNCC floor (noise_variance_factor), damping the one iteration per level.
+RefineOptions SmallOptionsTwoPairs();
+
+// The plane scene started `coarse_off_m` above the plane, whose initial surface for the
+// finer levels (initial_for_edge, meshed at half their edge) is `finer_off_m` above it.
+RefineInput PlaneWithInitialSurfaces(const Plane& plane, double coarse_off_m, double finer_off_m);
 
 }  // namespace satmesh::testing

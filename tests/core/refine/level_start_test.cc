@@ -1,0 +1,206 @@
+// Where a level starts and what it is compared with: the coarse start (grid_start) and
+// the initial-surface check below the coarsest level (refine.cc, ChooseCoarseStart,
+// CoarseToFine).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "core/refine/refine.h"
+#include "core/refine/refine_level.h"
+#include "tests/core/refine/plane_scene.h"
+
+namespace satmesh {
+namespace {
+
+using testing::PlaneError;
+using testing::PlaneWithInitialSurfaces;
+using testing::SmallOptions;
+using testing::SmallOptionsTwoPairs;
+
+// grid_start 1: a DSM start's coarse level is the DSM's own grid with cells of that
+// level's triangle edge (initial_for_edge at twice the edge), not the initial mesh's finer
+// cells.
+TEST(Refine, TheGridStartsCoarseLevelIsTheGridAtItsEdge) {
+  const testing::Plane plane;
+  const RefineInput input = PlaneWithInitialSurfaces(plane, 0.0, 0.0);  // initial mesh: 1 m cells
+  RefineOptions o = SmallOptions();
+  o.grid_start = 1;
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;
+  const RefineResult result = Refine(input, o);
+  ASSERT_EQ(result.levels.size(), 3u);
+  EXPECT_EQ(result.grid_start, 1);
+  const double edge_m = o.coarse_edge_px * result.gsd_m * 4;  // level 2
+  const TriangleMesh grid = testing::PlaneMesh(plane, 40, edge_m, 0.0);
+  EXPECT_EQ(result.levels[0].num_vertices, int(grid.num_vertices())) << edge_m;
+  EXPECT_LT(result.levels[0].num_vertices, int(input.initial_mesh.num_vertices()) / 4);
+}
+
+// The grid start (the DSM's grid at each level's edge, the umbrella weighted by 1 / edge
+// length) converges as the remesh does: a plane whose initial surfaces are 3 m (6 GSD) off.
+TEST(Refine, TheGridStartConvergesAsTheRemeshDoes) {
+  const testing::Plane plane;
+  const RefineInput input = PlaneWithInitialSurfaces(plane, 3.0, 3.0);
+  RefineOptions remesh = SmallOptions(), grid = SmallOptions();
+  remesh.grid_start = 0;
+  grid.grid_start = 1;
+  const RefineResult a = Refine(input, remesh), b = Refine(input, grid);
+  const auto [mean_a, p95_a] = PlaneError(a.mesh, plane, 30);
+  const auto [mean_b, p95_b] = PlaneError(b.mesh, plane, 30);
+  std::printf("remesh: mean %.4f p95 %.4f m; grid: mean %.4f p95 %.4f m\n", mean_a, p95_a,
+              mean_b, p95_b);
+  EXPECT_LT(mean_b, 0.1);
+  EXPECT_LT(p95_b, 0.25);
+  EXPECT_LT(mean_b, 1.2 * mean_a + 0.005);
+}
+
+// grid_start -1 takes the grid where the images resolve the median vertex's height at full
+// resolution to initial_detail_gsd through more than one pair, the remesh elsewhere: the
+// plane's three views (pairs at 10-16 degrees, noise-free texture) resolve it; three views
+// of one pass (pairs at 5-14 degrees) whose images carry noise of a fifth of the texture's
+// range do not; one pair of the noise-free views never takes the grid.
+TEST(Refine, TheGridStartIsTakenWhereTheImagesResolveTheSurface) {
+  const testing::Plane plane;
+  RefineOptions o = SmallOptions();
+  o.levels = 0;
+  o.iterations_per_level = 1;
+  ASSERT_EQ(o.grid_start, -1);
+  const RefineInput resolved = PlaneWithInitialSurfaces(plane, 0.0, 0.0);
+  const RefineResult three = Refine(resolved, o);
+  ASSERT_EQ(three.pairs.size(), 3u);
+  EXPECT_EQ(three.grid_start, 1);
+
+  RefineInput noisy = resolved;
+  const std::vector<testing::ViewSpec> one_pass = {{3, 0}, {8, 0}, {6, 180}};
+  std::mt19937 rng(7);
+  std::normal_distribution<float> noise(0.f, 300.f);  // texture: 1500 DN of range
+  for (size_t v = 0; v < one_pass.size(); ++v) {
+    noisy.views[v].rpc = testing::AffineRpc(noisy.frame, one_pass[v], 0.5, 200);
+    noisy.views[v].image = testing::RenderPlane(noisy.views[v].rpc, noisy.frame, plane, 200);
+    for (float& px : noisy.views[v].image.pixels) px += noise(rng);
+  }
+  const RefineResult not_resolved = Refine(noisy, o);
+  ASSERT_EQ(not_resolved.pairs.size(), 3u);
+  EXPECT_EQ(not_resolved.grid_start, 0);
+
+  RefineInput two = resolved;
+  two.views.resize(2);
+  const RefineResult one_pair = Refine(two, o);
+  ASSERT_EQ(one_pair.pairs.size(), 1u);
+  EXPECT_EQ(one_pair.grid_start, 0);
+}
+
+// Where the grid start is taken, level 0's initial-surface check compares with the level-0
+// grid's ZNCC that ChooseCoarseStart measured (the grid a restart there starts from) instead
+// of measuring the initial surface again; the levels above measure it as before.
+TEST(Refine, TheGridStartsLevelZeroCheckReusesTheChoicesMeasurement) {
+  const testing::Plane plane;
+  const RefineInput input = PlaneWithInitialSurfaces(plane, 0.0, 0.0);
+  RefineOptions o = SmallOptions();
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;
+  const RefineResult result = Refine(input, o);
+  ASSERT_EQ(result.grid_start, 1);
+  ASSERT_EQ(result.levels.size(), 3u);
+  const LevelStats& level1 = result.levels[1];
+  const LevelStats& level0 = result.levels[2];
+  ASSERT_FALSE(std::isnan(level1.initial_zncc));
+  EXPECT_GT(level1.initial_check_s, 0.0);
+  ASSERT_FALSE(std::isnan(level0.initial_zncc));
+  EXPECT_EQ(level0.initial_check_s, 0.0);
+  const TriangleMesh grid = input.initial_for_edge(2 * o.coarse_edge_px * result.gsd_m);
+  const double measured = MeasureMeanZncc(input, grid, result.pairs, 0, o);  // Embree
+  EXPECT_NEAR(level0.initial_zncc, measured, 0.005);
+}
+
+// A level below the coarsest restarts from the initial surface when that explains the
+// images better than the previous level's result. Here the coarse start (initial_mesh) is
+// 3 m (6 GSD) off, one iteration per level cannot bring it back, and the surface for the
+// finer levels (initial_for_edge) is exact.
+TEST(Refine, RestartsFromTheInitialSurfaceWhenItExplainsTheImagesBetter) {
+  const testing::Plane plane;
+  const RefineInput input = PlaneWithInitialSurfaces(plane, /*coarse_off_m=*/3.0,
+                                                     /*finer_off_m=*/0.0);
+  RefineOptions o = SmallOptions();
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;  // one iteration at every level, the coarsest too
+  o.grid_start = 0;  // the coarse start from initial_mesh (the grid's is initial_for_edge's)
+  const RefineResult result = Refine(input, o);
+  ASSERT_EQ(result.levels.size(), 3u);
+  EXPECT_TRUE(std::isnan(result.levels[0].initial_zncc));  // the coarsest: nothing to compare
+  EXPECT_FALSE(result.levels[0].restarted);
+  EXPECT_TRUE(result.levels[1].restarted);
+  EXPECT_GT(result.levels[1].initial_zncc, 0.9);
+  EXPECT_NEAR(result.levels[1].mean_zncc.front(), result.levels[1].initial_zncc, 0.02);
+  EXPECT_FALSE(std::isnan(result.levels[2].initial_zncc));
+  const auto [mean, p95] = PlaneError(result.mesh, plane, 30);
+  EXPECT_LT(mean, 0.05);  // 0.1 GSD
+
+  o.restart_from_initial = false;
+  const RefineResult chained = Refine(input, o);
+  for (const auto& level : chained.levels) {
+    EXPECT_FALSE(level.restarted);
+    EXPECT_TRUE(std::isnan(level.initial_zncc));
+  }
+  EXPECT_GT(PlaneError(chained.mesh, plane, 30).first, 0.5);  // still metres off
+}
+
+TEST(PairGroups, PairKIsInGroupKModGroupsAndTheCheckTakesGroupZero) {
+  std::vector<std::pair<int, int>> pairs;
+  for (int k = 0; k < 7; ++k) pairs.push_back({k, k + 1});
+  RefineOptions o;
+  o.pairs_per_iteration = 3;
+  EXPECT_EQ(PairGroups(7, o), 3);
+  EXPECT_EQ(PairGroup(pairs, 3, 1), (std::vector<std::pair<int, int>>{{1, 2}, {4, 5}}));
+  EXPECT_EQ(InitialCheckPairs(pairs, o), (std::vector<std::pair<int, int>>{{0, 1}, {3, 4}, {6, 7}}));
+  o.pairs_per_iteration = 7;  // one group: every pair
+  EXPECT_EQ(PairGroups(7, o), 1);
+  EXPECT_EQ(InitialCheckPairs(pairs, o), pairs);
+  o.pairs_per_iteration = 0;
+  EXPECT_EQ(InitialCheckPairs(pairs, o), pairs);
+}
+
+// With the pairs in groups, the initial surface is measured on group 0 alone and the
+// previous level's result compared on the same pairs: the restart is still found, and
+// after it the level's first iteration (the initial surface remeshed) measures what the
+// check measured.
+TEST(Refine, TheInitialSurfaceCheckComparesOnePairGroup) {
+  const testing::Plane plane;
+  const RefineInput input = PlaneWithInitialSurfaces(plane, /*coarse_off_m=*/3.0,
+                                                     /*finer_off_m=*/0.0);
+  RefineOptions o = SmallOptions();
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;
+  o.pairs_per_iteration = 1;  // 3 pairs: 3 groups, the check on the first pair only
+  const RefineResult result = Refine(input, o);
+  ASSERT_EQ(result.pairs.size(), 3u);
+  ASSERT_EQ(result.levels.size(), 3u);
+  EXPECT_TRUE(result.levels[1].restarted);
+  EXPECT_NEAR(result.levels[1].check_zncc, result.levels[1].initial_zncc, 0.02);
+  EXPECT_LT(PlaneError(result.mesh, plane, 30).first, 0.05);
+}
+
+// Once the chain beats the initial surface clearly (here: the chain starts exact, the
+// surface for the finer levels is 3 m off), the finer levels stop measuring it.
+TEST(Refine, StopsMeasuringTheInitialSurfaceOnceTheChainWinsClearly) {
+  const testing::Plane plane;
+  const RefineInput input = PlaneWithInitialSurfaces(plane, /*coarse_off_m=*/0.0,
+                                                     /*finer_off_m=*/3.0);
+  RefineOptions o = SmallOptionsTwoPairs();
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;  // one iteration at every level, the coarsest too
+  const RefineResult result = Refine(input, o);
+  ASSERT_EQ(result.levels.size(), 3u);
+  EXPECT_FALSE(std::isnan(result.levels[1].initial_zncc));  // measured once
+  EXPECT_GT(result.levels[1].mean_zncc.front(), result.levels[1].initial_zncc + 0.01);
+  EXPECT_FALSE(result.levels[1].restarted);
+  EXPECT_TRUE(std::isnan(result.levels[2].initial_zncc));  // not again
+  EXPECT_EQ(result.levels[2].initial_check_s, 0.0);
+  EXPECT_FALSE(result.levels[2].restarted);
+  EXPECT_LT(PlaneError(result.mesh, plane, 30).first, 0.05);  // 0.1 GSD: the chain kept
+}
+
+}  // namespace
+}  // namespace satmesh
