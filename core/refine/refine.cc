@@ -64,12 +64,21 @@ double LevelEdge(const RefineOptions& options, double gsd_m, int level) {
   return options.coarse_edge_px * gsd_m * std::ldexp(1.0, level);
 }
 
+// The median vertex's height sigma from the images (+inf, unseen, sorts last); NaN for no
+// vertex. The tests of LevelStartMesh and ChooseCoarseStart.
+double MedianVertexSigma(std::vector<float> sigma) {
+  if (sigma.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto middle = sigma.begin() + long(sigma.size() / 2);
+  std::nth_element(sigma.begin(), middle, sigma.end());
+  return *middle;
+}
+
 // `mesh` remeshed isotropically to the triangle edge of `level`. With options.grid_start
 // (resolved: ChooseCoarseStart): a DSM start's own grid with cells of that edge (block
-// means), else `mesh` as it is. (The initial mesh's cells are half the edge estimated from the DSM
-// cell before the GSD is known, CoarseCellSize: 1-pixel cells at the coarse level of a 0.3 m
-// job, whose roofs refine 8-13% worse than from 2-pixel cells, equal to the remesh's:
-// docs/benchmarks-history.md, session 24.)
+// means), else `mesh` as it is. (The initial mesh's cells are half the edge estimated from
+// the DSM cell before the GSD is known, CoarseCellSize: 1-pixel cells at the coarse level
+// of a 0.3 m job, whose roofs refine 8-13% worse than from 2-pixel cells, equal to the
+// remesh's: docs/benchmarks-history.md, session 24.)
 TriangleMesh RemeshForLevel(const RefineInput& input, TriangleMesh mesh,
                             const RefineOptions& options, double gsd_m, int level,
                             const Progress& progress) {
@@ -111,14 +120,13 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
   if (level != 0 || options.grid_start > 0 || !(options.initial_detail_gsd > 0))
     return mesh;
   const double tolerance_m = options.initial_detail_gsd * gsd_m;
-  std::vector<float> sigma = LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh);
-  const auto middle = sigma.begin() + long(sigma.size() / 2);
-  std::nth_element(sigma.begin(), middle, sigma.end());  // +inf (unseen) sorts last
-  if (median_sigma_m && !sigma.empty()) *median_sigma_m = *middle;
-  if (sigma.empty() || !(*middle > tolerance_m)) {
+  const double median =
+      MedianVertexSigma(LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh));
+  if (median_sigma_m) *median_sigma_m = median;
+  if (!(median > tolerance_m)) {
     spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex), within "
                  "{:.2f} m: the coarse mesh is kept at {} pixels",
-                 sigma.empty() ? 0.0 : double(*middle), tolerance_m, options.coarse_edge_px);
+                 std::isnan(median) ? 0.0 : median, tolerance_m, options.coarse_edge_px);
     return mesh;
   }
   const RayScene initial(input.initial_mesh);  // after the test: a DSM mesh of millions of faces
@@ -130,7 +138,7 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
   spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex): {} of {} "
                "faces of the coarse mesh subdivided where the initial surface departs from them "
                "by more than {:.2f} m ({} faces)",
-               double(*middle), subdivided, faces_before, tolerance_m, mesh.num_faces());
+               median, subdivided, faces_before, tolerance_m, mesh.num_faces());
   return mesh;
 }
 
@@ -138,9 +146,9 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
 // grid at the levels' triangle edge (with the umbrella weighted by 1 / edge length) where
 // the images resolve the median vertex's height at full resolution to initial_detail_gsd:
 // there the images form the walls the grid lacks, better than from the remesh's walls
-// (multi-date 0.5 m s1 / s2: facades 37.8 / 33.2 -> 48.8 / 38.8%, roofs 0.210 / 0.230 ->
-// 0.200 / 0.223 m; docs/benchmarks-history.md, session 25). Else (a stereo pair, a
-// tri-stereo: 0.6-0.9 GSD on the grid, against 0.03-0.17 GSD for multi-date sets) the
+// (multi-date 0.5 m s1 / s2: facades 37.8 / 33.2 -> 48.8 / 38.9%, roofs 0.210 / 0.230 ->
+// 0.199 / 0.223 m; docs/benchmarks-history.md, session 25). Else (a stereo pair, a
+// tri-stereo: 0.4-1.0 GSD on the grid, against 0.03-0.17 GSD for multi-date sets) the
 // remesh, which keeps the DSM's walls: one pass does not form them (stereo 0.5 m s1
 // facades 24.2% from the remesh, 19.1% from the grid). One pair never takes the grid: the
 // two views of a pass see the walls of at most two sides, and on the real Pléiades pair
@@ -162,15 +170,13 @@ int ChooseCoarseStart(const RefineInput& input, const RefineOptions& options,
   TriangleMesh mesh = input.initial_for_edge(2 * LevelEdge(options, gsd_m, 0));
   LevelMeasure measure =
       MeasureLevel(input, views, InitialCheckPairs(pairs, options), options, gsd_m, 0, mesh);
-  std::vector<float>& sigma = measure.height_sigma;
-  if (sigma.empty()) return 0;
-  const auto middle = sigma.begin() + long(sigma.size() / 2);
-  std::nth_element(sigma.begin(), middle, sigma.end());  // +inf (unseen) sorts last
+  const double median = MedianVertexSigma(std::move(measure.height_sigma));
+  if (std::isnan(median)) return 0;
   const double tolerance_m = options.initial_detail_gsd * gsd_m;
-  const bool resolves = *middle <= tolerance_m;
+  const bool resolves = median <= tolerance_m;
   spdlog::info("refine: the images resolve the DSM's grid at full resolution to {:.2f} m "
                "(median vertex, {}within {:.2f} m): the coarse mesh is {}",
-               double(*middle), resolves ? "" : "not ", tolerance_m,
+               median, resolves ? "" : "not ", tolerance_m,
                resolves ? "the DSM's grid, the images form the walls"
                         : "the DSM mesh remeshed, its walls kept");
   if (resolves && options.levels == 0) *grid = std::move(mesh);
