@@ -73,8 +73,10 @@ void PrintLevels(const RefineResult& refine) {
               "smooth", "update", "total", "intersect", "level_s");
   for (const auto& level : refine.levels) {
     const StageTimes t = PerIteration(level);
-    std::printf("%5d %5d %9d %9d %6.2f %7.4f->%7.4f | %18s %8.3f %8.3f %8.3f %8.3f %8.3f | %9.3f %8.1f",
-                level.level, level.iterations, level.num_vertices, level.num_faces, level.gsd_m,
+    // "0c": level 0 run again on its creases subdivided (RefineOptions::crease_pass)
+    const std::string name = std::to_string(level.level) + (level.crease_pass ? "c" : "");
+    std::printf("%5s %5d %9d %9d %6.2f %7.4f->%7.4f | %18s %8.3f %8.3f %8.3f %8.3f %8.3f | %9.3f %8.1f",
+                name.c_str(), level.iterations, level.num_vertices, level.num_faces, level.gsd_m,
                 level.mean_zncc.front(), level.mean_zncc.back(), "", t.hit_maps_s, t.gradient_s,
                 t.smoothness_s, t.update_s, Sum(t), t.intersect_s, level.level_s);
     if (std::isnan(level.initial_zncc)) std::printf(" |\n");
@@ -222,6 +224,7 @@ int RunBench(const std::vector<std::string>& argv) {
                                              {"total", Sum(t)}, {"intersect", t.intersect_s}}},
                         {"initial_zncc", level.initial_zncc},
                         {"restarted_from_initial", level.restarted},
+                        {"crease_pass", level.crease_pass},
                         {"initial_check_s", level.initial_check_s},
                         {"level_s", level.level_s}});
     }

@@ -45,8 +45,8 @@ int RunRefine(const std::vector<std::string>& argv) {
   const auto outputs = RunJobFile(args.positionals()[0], args.Require("out"), overrides);
   for (const auto& level : outputs.refine.levels) {
     if (level.mean_zncc.empty()) continue;
-    std::printf("level %d: %7d faces  mean ZNCC %.4f -> %.4f  (%.1f s)\n", level.level,
-                level.num_faces, level.mean_zncc.front(), level.mean_zncc.back(), level.level_s);
+    std::printf("level %d%s: %7d faces  mean ZNCC %.4f -> %.4f  (%.1f s)\n", level.level,
+                level.crease_pass ? " (creases)" : "", level.num_faces, level.mean_zncc.front(), level.mean_zncc.back(), level.level_s);
   }
   for (const auto& tile : outputs.tiles) {
     if (!tile.ok) {

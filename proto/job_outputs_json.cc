@@ -36,6 +36,7 @@ json LevelsToJson(const std::vector<LevelStats>& levels) {
                    {"mean_zncc_end", l.mean_zncc.empty() ? 0.0 : l.mean_zncc.back()},
                    {"initial_zncc", l.initial_zncc},  // NaN (null): not compared
                    {"restarted_from_initial", l.restarted},
+                   {"crease_pass", l.crease_pass},
                    {"time_s", {{"hit_maps", l.times.hit_maps_s},
                                {"intersect", l.times.intersect_s},
                                {"sunlight", l.times.sunlight_s},
@@ -72,6 +73,7 @@ std::vector<LevelStats> LevelsFromJson(const json& levels) {
     s.mean_zncc = l.value("mean_zncc", std::vector<double>{});
     s.initial_zncc = NumberOr(l, "initial_zncc", std::numeric_limits<double>::quiet_NaN());
     s.restarted = l.value("restarted_from_initial", false);
+    s.crease_pass = l.value("crease_pass", false);
     if (l.contains("time_s")) {
       const json& t = l["time_s"];
       s.times.hit_maps_s = t.value("hit_maps", 0.0);

@@ -58,6 +58,7 @@ struct LevelStats {
   // level's result (NaN: not compared); restarted: the level started from it.
   double initial_zncc = std::numeric_limits<double>::quiet_NaN();
   bool restarted = false;
+  bool crease_pass = false;            // level 0 run again on its creases subdivided
   double initial_check_s = 0;          // meshing and measuring the initial surface
   // 10/50/90% quantiles of the vertices' height sigma from the images, in level GSD
   // (refine.cc, HeightConfidenceFromInformation); empty: not measured.

@@ -78,6 +78,10 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "walls (a mesh start: its triangles as they are); 0: isotropic remesh of the DSM mesh "
        "(its walls kept); -1: the grid where the images resolve the median vertex's height at "
        "full resolution to initial_detail_gsd, else the remesh"},
+      {"crease_pass", &R::crease_pass, Range::In(-1, 1),
+       "after the full-resolution level, the faces near its creases (off their neighbours' "
+       "plane by more than flat_tolerance_gsd) are subdivided and the level runs again on them; "
+       "1: on, 0: off, -1: on for the grid start of a job without coarser levels"},
       {"restart_from_initial", &R::restart_from_initial, {},
        "below the coarsest level, continue from the initial surface unless the previous level's "
        "result matches the images better"},

@@ -81,6 +81,13 @@ struct RefineOptions {
                                    // vertex's height at full resolution to
                                    // initial_detail_gsd (multi-date sets), else the remesh
                                    // (stereo, tri-stereo; refine.cc, ChooseCoarseStart)
+  int crease_pass = -1;            // after the full-resolution level, the faces near its
+                                   // creases (a vertex off its neighbours' plane by more
+                                   // than flat_tolerance_gsd) are subdivided and the level
+                                   // is run again on them: the walls' triangles get 1 pixel
+                                   // where a coarser level would have given the subdivision;
+                                   // 1: on, 0: off, -1: on for the grid start of a job
+                                   // without coarser levels (refine.cc, CreasePass)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous
                                      // level's result has a mean ZNCC higher by > 0.001

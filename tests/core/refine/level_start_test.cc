@@ -92,6 +92,48 @@ TEST(Refine, TheGridStartIsTakenWhereTheImagesResolveTheSurface) {
   EXPECT_EQ(one_pair.grid_start, 0);
 }
 
+// crease_pass -1: a job without coarser levels that starts from the DSM's grid runs level 0
+// again with the faces near its creases subdivided (on the plane: near its boundary only,
+// the planar interior keeps its triangles); its progress keeps rising to 1; a remesh start
+// (crease_pass resolved 0) runs level 0 once.
+TEST(Refine, TheGridStartWithoutCoarserLevelsRunsLevelZeroAgainOnItsCreases) {
+  const testing::Plane plane;
+  const RefineInput input = PlaneWithInitialSurfaces(plane, 0.5, 0.5);
+  RefineOptions o = SmallOptions();
+  o.levels = 0;
+  o.iterations_per_level = 3;
+  ASSERT_EQ(o.crease_pass, -1);
+  std::vector<double> reported;
+  const Progress progress{[&reported](double f, const std::string&) { reported.push_back(f); }, {}};
+  const RefineResult crease = Refine(input, o, progress);
+  ASSERT_EQ(crease.grid_start, 1);
+  ASSERT_EQ(crease.levels.size(), 2u);
+  EXPECT_FALSE(crease.levels[0].crease_pass);
+  EXPECT_TRUE(crease.levels[1].crease_pass);
+  EXPECT_EQ(crease.levels[1].level, 0);
+  const int before = crease.levels[0].num_faces, after = crease.levels[1].num_faces;
+  EXPECT_GT(after, before);
+  EXPECT_LT(after, 2 * before);  // all of them subdivided: 4x
+  EXPECT_EQ(int(crease.mesh.num_faces()), after);
+  ASSERT_FALSE(reported.empty());
+  for (size_t k = 1; k < reported.size(); ++k) EXPECT_GE(reported[k], reported[k - 1] - 1e-12) << k;
+  EXPECT_NEAR(reported.back(), 1.0, 1e-9);
+
+  o.crease_pass = 0;
+  const RefineResult once = Refine(input, o);
+  ASSERT_EQ(once.levels.size(), 1u);
+  const auto [mean_crease, p95_crease] = PlaneError(crease.mesh, plane, 30);
+  const auto [mean_once, p95_once] = PlaneError(once.mesh, plane, 30);
+  std::printf("once: mean %.4f p95 %.4f m; with the crease pass: mean %.4f p95 %.4f m\n",
+              mean_once, p95_once, mean_crease, p95_crease);
+  EXPECT_LT(mean_crease, mean_once + 0.01);
+
+  o.crease_pass = -1;
+  o.grid_start = 0;
+  const RefineResult remesh = Refine(input, o);
+  EXPECT_EQ(remesh.levels.size(), 1u);
+}
+
 // Where the grid start is taken, level 0's initial-surface check compares with the level-0
 // grid's ZNCC that ChooseCoarseStart measured (the grid a restart there starts from) instead
 // of measuring the initial surface again; the levels above measure it as before.
