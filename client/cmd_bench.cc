@@ -27,10 +27,10 @@ double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
-// Per-iteration stage times: ray casting and the photometric pass run iterations+1 times
-// (the last one only measures), smoothing and the update `iterations` times.
+// Per-iteration stage times: ray casting, the photometric pass, smoothing and the update
+// run once an iteration (a level of 0 iterations: one pass that only measures).
 StageTimes PerIteration(const LevelStats& level) {
-  const double passes = level.iterations + 1, steps = std::max(1, level.iterations);
+  const double passes = std::max(1, level.iterations), steps = passes;
   return {level.times.hit_maps_s / passes, level.times.gradient_s / passes,
           level.times.smoothness_s / steps, level.times.update_s / steps,
           level.times.intersect_s / passes};

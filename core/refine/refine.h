@@ -51,7 +51,7 @@ struct LevelStats {
                                        // iterations together (pairs_per_iteration)
   int num_vertices = 0, num_faces = 0;
   double gsd_m = 0;                    // ground sampling distance of the level
-  std::vector<double> mean_zncc;       // before each iteration, and after the last
+  std::vector<double> mean_zncc;       // before each iteration's step (none after the last)
   double check_zncc = 0;               // the first iteration's over the pairs the initial
                                        // surface is compared on (InitialCheckPairs)
   // Mean ZNCC of the initial surface at this level, when compared with the previous

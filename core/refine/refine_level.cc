@@ -292,10 +292,20 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   std::vector<PairEnergy> first_energies;  // the first iteration's, per pair-direction
   std::vector<HitMapUpdate> update(views.size());
   std::vector<int> made_at(views.size(), 0);
+  // No pass after the last step only to measure (it cost 12% of level 0's photometric
+  // work on the large job, and a rasterization of every view): at level 0 the last
+  // iterations, which take every pair, gather the Fisher information of the surface for
+  // its height sigma, both directions of each pair (two iterations where they alternate).
+  // iterations 0: one pass that measures and moves nothing.
+  const bool measure_only = iterations == 0;
+  const int passes = std::max(1, iterations);
+  const int information_from =
+      level == 0 ? passes - (opt.alternate_directions && passes >= 3 ? 2 : 1) : passes;
 
-  for (int it = 0; it <= iterations; ++it) {
+  for (int it = 0; it < passes; ++it) {
     ctx.progress.ThrowIfCancelled();
-    const bool last = it == iterations;
+    const bool last = it == passes - 1;
+    const bool final_information = it >= information_from;
     const bool grouped = groups > 1 && it > 0 && it < iterations - kEveryPairAtTheEnd;
     group_pairs = PairGroup(ctx.pairs, grouped ? groups : 1, grouped ? (it - 1) % groups : 0);
     // The group's views follow their faces (points moved with them), or are made anew.
@@ -304,7 +314,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       update[slot[i]] = update[slot[j]] = HitMapUpdate::kFollow;
     for (size_t v = 0; v < views.size(); ++v) {
       if (update[v] == HitMapUpdate::kFollow &&
-          (it == 0 || last || it - made_at[v] >= opt.hit_maps_every * (grouped ? groups : 1))) {
+          (it == 0 || it - made_at[v] >= opt.hit_maps_every * (grouped ? groups : 1))) {
         update[v] = HitMapUpdate::kRasterize;
         made_at[v] = it;
       }
@@ -319,7 +329,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       }
     }
     UpdateHitMaps(*mesh, &views, &raster, &normals, update);
-    if (!suns.empty() && (it == 0 || last)) {
+    if (!suns.empty() && it == 0) {
       const auto ts = StageClock::now();
       MarkSunlight(*mesh, normals, suns, ctx.pairs, &views);
       stats.times.sunlight_s += SecondsSince(ts);
@@ -329,16 +339,16 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     t0 = StageClock::now();
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
     std::fill(seen.begin(), seen.end(), 0);
-    if (last) std::fill(information.begin(), information.end(), 0.0);
-    // Iterations between the first and the last take one direction per pair, alternating
-    // (from one turn through the groups to the next where the pairs are grouped).
-    const bool half = opt.alternate_directions && it > 0 && !last;
+    if (it == information_from && it > 0) std::fill(information.begin(), information.end(), 0.0);
+    // Iterations after the first take one direction per pair, alternating (from one turn
+    // through the groups to the next where the pairs are grouped).
+    const bool half = opt.alternate_directions && it > 0;
     const int turn = grouped ? (it - 1) / groups : it;
     const double zncc = PhotometricPass(views, slot, group_pairs, *mesh, normals, photo, &scratch,
-                                        last ? nullptr : &gradient, last ? nullptr : &seen,
-                                        half ? turn % 2 : -1,
+                                        measure_only ? nullptr : &gradient,
+                                        measure_only ? nullptr : &seen, half ? turn % 2 : -1,
                                         (it == 0 && (data_confidence || initial_prior)) ||
-                                                (last && level == 0)
+                                                final_information
                                             ? &information
                                             : nullptr,
                                         it == 0 && groups > 1 ? &first_energies : nullptr);
@@ -363,11 +373,10 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       }
       if (stats.check_zncc < abandon_below) return false;
     }
-    if (last) {
-      // The finished surface's height sigma from the images (+inf: no image sees it).
-      if (level == 0) mesh->height_sigma = HeightSigmaFromInformation(information, noise_variance);
-      break;
-    }
+    // The finished surface's height sigma from the images (+inf: no image sees it).
+    if (last && level == 0)
+      mesh->height_sigma = HeightSigmaFromInformation(information, noise_variance);
+    if (measure_only) break;
 
     t0 = StageClock::now();
     std::vector<Eigen::Vector3f> u2 = UmbrellaSquared(mesh->vertices, adjacency, &umbrella_weights);
@@ -405,7 +414,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     if (scene) scene->UpdateVertices(mesh->vertices);
     stats.times.update_s += SecondsSince(t0);
     ++stats.iterations;
-    const double done = (opt.levels - level + double(it + 1) / (iterations + 1));
+    const double done = (opt.levels - level + double(it + 1) / passes);
     ctx.progress.Report(done / (opt.levels + 1), "level " + std::to_string(level));
   }
   stats.level_s = SecondsSince(level_start);
