@@ -232,8 +232,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   const double noise_variance = MeanNoiseVariance(ctx.sources, level);
   PhotometricOptions photo = PhotometricOptionsAt(opt, gsd, noise_variance);
   // Moving shadows (sunlit_pairs): which suns light each pixel's point, by the level's
-  // surface at its first iteration and again at its last (the light changes little while
-  // the surface moves by a fraction of a metre; marking costs ~3 s a time at 0.5 m).
+  // surface at its first iteration, kept for the level (the light changes little while the
+  // surface moves by a fraction of a metre; marking costs ~3 s a time at 0.5 m).
   const std::vector<Eigen::Vector3f> suns = SunsToMask(ctx.input, opt);
   photo.sunlit_only = !suns.empty();
 
