@@ -222,17 +222,15 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 }
 
 // Step 4b, RefineOptions::crease_pass: level 0 run again from its result with the faces
-// near its creases subdivided (FacesToSubdivide at flat_tolerance_gsd, as between levels).
-// A level below the coarsest starts from such a subdivision; a job without coarser levels
-// gave its walls 2-pixel triangles only. On the DSM's grid of multi-date 0.5 m sets (3
-// seeds made after the choice): facades @0.5 m 46.2 / 41.2 / 42.3 -> 49.9 / 44.4 / 45.6%, F
-// 55.0 / 52.7 / 53.2 -> 56.5 / 53.8 / 54.6, roofs 0.258 / 0.267 / 0.220 -> 0.249 / 0.273 /
-// 0.223 m; 50 iterations at 2 pixels instead give 47.7 / 42.6 / 43.5%
-// (docs/benchmarks-history.md, session 26). It costs more than the level (it rasterizes
-// three times the faces): such a job takes 20 s instead of 10. One pair's 1-pixel
-// triangles are its noise (stereo 0.5 m roofs 8% worse, the real Pléiades pairs' held-out
-// ZNCC lower): by default only after the grid start, which more than one pair resolves
-// (ResolveCreasePass).
+// near its creases subdivided (FacesToSubdivide at flat_tolerance_gsd, as between levels,
+// where a job without coarser levels gave its walls 2-pixel triangles only). On the DSM's
+// grid of multi-date 0.5 m sets (3 seeds made after the choice): facades @0.5 m 46.2 / 41.2
+// / 42.3 -> 49.9 / 44.4 / 45.6%, F 55.0 / 52.7 / 53.2 -> 56.5 / 53.8 / 54.6, roofs 0.258 /
+// 0.267 / 0.220 -> 0.249 / 0.273 / 0.223 m; 50 iterations at 2 pixels instead: 47.7 / 42.6 /
+// 43.5% (docs/benchmarks-history.md, session 26). It rasterizes three times the faces: 20 s
+// a job instead of 10. One pair's 1-pixel triangles are its noise (stereo 0.5 m roofs 8%
+// worse, the real Pléiades pairs' held-out ZNCC lower): by default only after the grid
+// start, which more than one pair resolves (ResolveCreasePass).
 void CreasePass(const LevelContext& ctx, TriangleMesh* mesh, RefineResult* result) {
   const double tolerance_m = ctx.options.flat_tolerance_gsd * ctx.gsd_m;
   const std::vector<char> subdivide = FacesToSubdivide(*mesh, tolerance_m);
