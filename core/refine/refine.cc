@@ -229,8 +229,9 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 // 0.267 / 0.220 -> 0.249 / 0.273 / 0.223 m; 50 iterations at 2 pixels instead: 47.7 / 42.6 /
 // 43.5% (docs/benchmarks-history.md, session 26). It rasterizes three times the faces: 20 s
 // a job instead of 10. One pair's 1-pixel triangles are its noise (stereo 0.5 m roofs 8%
-// worse, the real Pléiades pairs' held-out ZNCC lower): by default only after the grid
-// start, which more than one pair resolves (ResolveCreasePass).
+// worse, the real Pléiades pairs' held-out ZNCC lower): by default where more than one pair
+// was selected (tri-stereo 0.5 m s1 / s2 / s3 on the remesh: roofs 0.348 / 0.366 / 0.330 ->
+// 0.332 / 0.345 / 0.328 m, facades +0.8 to +1.6 points; ResolveCreasePass).
 void CreasePass(const LevelContext& ctx, TriangleMesh* mesh, RefineResult* result) {
   const double tolerance_m = ctx.options.flat_tolerance_gsd * ctx.gsd_m;
   const std::vector<char> subdivide = FacesToSubdivide(*mesh, tolerance_m);
@@ -247,11 +248,11 @@ void CreasePass(const LevelContext& ctx, TriangleMesh* mesh, RefineResult* resul
   result->levels.push_back(std::move(stats));
 }
 
-// RefineOptions::crease_pass resolved: -1 is on for the DSM's grid start (grid_start
-// resolved) of a job without coarser levels.
-int ResolveCreasePass(const RefineOptions& options, bool initial_is_mesh) {
+// RefineOptions::crease_pass resolved: -1 is on for a DSM start without coarser levels
+// whose selection has more than one pair.
+int ResolveCreasePass(const RefineOptions& options, bool initial_is_mesh, size_t num_pairs) {
   if (options.crease_pass >= 0) return options.crease_pass;
-  return options.grid_start > 0 && options.levels == 0 && !initial_is_mesh ? 1 : 0;
+  return options.levels == 0 && !initial_is_mesh && num_pairs > 1 ? 1 : 0;
 }
 
 // Step 4: coarse to fine. Below the coarsest level, the previous level's result
@@ -485,7 +486,7 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
                    median_sigma_m, kCarriedLevelSigmaGsd);
     }
   }
-  options.crease_pass = ResolveCreasePass(options, input.initial_is_mesh);
+  options.crease_pass = ResolveCreasePass(options, input.initial_is_mesh, result.pairs.size());
   CoarseToFine(input, options, progress, views, &result, std::move(level0_start),
                level0_initial_zncc);
 

@@ -81,7 +81,7 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"crease_pass", &R::crease_pass, Range::In(-1, 1),
        "after the full-resolution level, the faces near its creases (off their neighbours' "
        "plane by more than flat_tolerance_gsd) are subdivided and the level runs again on them; "
-       "1: on, 0: off, -1: on for the grid start of a job without coarser levels"},
+       "1: on, 0: off, -1: on for a DSM start without coarser levels and with more than one pair"},
       {"restart_from_initial", &R::restart_from_initial, {},
        "below the coarsest level, continue from the initial surface unless the previous level's "
        "result matches the images better"},

@@ -86,8 +86,9 @@ struct RefineOptions {
                                    // than flat_tolerance_gsd) are subdivided and the level
                                    // is run again on them: the walls' triangles get 1 pixel
                                    // where a coarser level would have given the subdivision;
-                                   // 1: on, 0: off, -1: on for the grid start of a job
-                                   // without coarser levels (refine.cc, CreasePass)
+                                   // 1: on, 0: off, -1: on for a DSM start without
+                                   // coarser levels and with more than one pair (refine.cc,
+                                   // CreasePass)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous
                                      // level's result has a mean ZNCC higher by > 0.001

@@ -92,10 +92,10 @@ TEST(Refine, TheGridStartIsTakenWhereTheImagesResolveTheSurface) {
   EXPECT_EQ(one_pair.grid_start, 0);
 }
 
-// crease_pass -1: a job without coarser levels that starts from the DSM's grid runs level 0
-// again with the faces near its creases subdivided (on the plane: near its boundary only,
-// the planar interior keeps its triangles); its progress keeps rising to 1; a remesh start
-// (crease_pass resolved 0) runs level 0 once.
+// crease_pass -1: a DSM start without coarser levels and with more than one pair runs level
+// 0 again with the faces near its creases subdivided (on the plane: near its boundary only,
+// the planar interior keeps its triangles); its progress keeps rising to 1; one pair runs
+// level 0 once.
 TEST(Refine, TheGridStartWithoutCoarserLevelsRunsLevelZeroAgainOnItsCreases) {
   const testing::Plane plane;
   const RefineInput input = PlaneWithInitialSurfaces(plane, 0.5, 0.5);
@@ -131,7 +131,13 @@ TEST(Refine, TheGridStartWithoutCoarserLevelsRunsLevelZeroAgainOnItsCreases) {
   o.crease_pass = -1;
   o.grid_start = 0;
   const RefineResult remesh = Refine(input, o);
-  EXPECT_EQ(remesh.levels.size(), 1u);
+  EXPECT_EQ(remesh.levels.size(), 2u);  // three pairs: the remesh start gets it too
+  RefineInput two = input;
+  two.views.resize(2);
+  o.grid_start = -1;
+  const RefineResult one_pair = Refine(two, o);
+  ASSERT_EQ(one_pair.pairs.size(), 1u);
+  EXPECT_EQ(one_pair.levels.size(), 1u);  // one pair: never
 }
 
 // Where the grid start is taken, level 0's initial-surface check compares with the level-0
