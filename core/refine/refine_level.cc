@@ -295,12 +295,13 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // No pass after the last step only to measure (it cost 12% of level 0's photometric
   // work on the large job, and a rasterization of every view): at level 0 the last
   // iterations, which take every pair, gather the Fisher information of the surface for
-  // its height sigma, both directions of each pair (two iterations where they alternate).
-  // iterations 0: one pass that measures and moves nothing.
+  // its height sigma, both directions of each pair (two iterations where they alternate;
+  // a level of 1 or 2 iterations: its last, with both). iterations 0: one pass that
+  // measures and moves nothing.
   const bool measure_only = iterations == 0;
   const int passes = std::max(1, iterations);
-  const int information_from =
-      level == 0 ? passes - (opt.alternate_directions && passes >= 3 ? 2 : 1) : passes;
+  const int gathering = level == 0 ? (opt.alternate_directions && passes >= 3 ? 2 : 1) : 0;
+  const int information_from = passes - gathering;
 
   for (int it = 0; it < passes; ++it) {
     ctx.progress.ThrowIfCancelled();
@@ -342,7 +343,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     if (it == information_from && it > 0) std::fill(information.begin(), information.end(), 0.0);
     // Iterations after the first take one direction per pair, alternating (from one turn
     // through the groups to the next where the pairs are grouped).
-    const bool half = opt.alternate_directions && it > 0;
+    const bool half = opt.alternate_directions && it > 0 && !(gathering == 1 && final_information);
     const int turn = grouped ? (it - 1) / groups : it;
     const double zncc = PhotometricPass(views, slot, group_pairs, *mesh, normals, photo, &scratch,
                                         measure_only ? nullptr : &gradient,

@@ -309,5 +309,36 @@ TEST(Refine, TheFinerLevelAlsoKeepsWeaklyConstrainedVerticesNearItsStart) {
                                                  << " m, with: " << mean_error[1] << " m";
 }
 
+// No pass follows a level's last step: level 0's height sigma comes from its last
+// iterations (both directions of every pair: two iterations where the directions alternate,
+// else the last with both). It matches a measurement of the finished surface
+// (LevelHeightSigma, both directions) to within the last steps' change, for 2 and 4
+// iterations (the two cases).
+TEST(Refine, LevelZerosHeightSigmaIsTheFinishedSurfacesBothDirections) {
+  const testing::Plane plane;
+  const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                             testing::PlaneMesh(plane, 40, 1.0, 0.3));
+  const std::vector<PreparedView> views = PrepareViews(input, 0);
+  for (int iterations : {2, 4}) {
+    RefineOptions o = SmallOptions();
+    o.levels = 0;
+    o.iterations_per_level = iterations;
+    const RefineResult r = Refine(input, o);
+    ASSERT_EQ(r.mesh.height_sigma.size(), r.mesh.num_vertices());
+    const std::vector<float> measured =
+        LevelHeightSigma(input, views, r.pairs, o, r.gsd_m, 0, r.mesh);
+    std::vector<double> ratio;
+    for (size_t v = 0; v < measured.size(); ++v)
+      if (std::isfinite(measured[v]) && std::isfinite(r.mesh.height_sigma[v]) && measured[v] > 0)
+        ratio.push_back(r.mesh.height_sigma[v] / measured[v]);
+    ASSERT_GT(ratio.size(), measured.size() / 2);
+    std::nth_element(ratio.begin(), ratio.begin() + long(ratio.size() / 2), ratio.end());
+    const double median = ratio[ratio.size() / 2];
+    std::printf("%d iterations: median sigma ratio %.3f over %zu vertices\n", iterations, median,
+                ratio.size());
+    EXPECT_NEAR(median, 1.0, 0.1) << iterations;  // one direction only: sqrt(2) = 1.41
+  }
+}
+
 }  // namespace
 }  // namespace satmesh
