@@ -30,9 +30,9 @@ double Seconds(Clock::time_point since) {
 // Per-iteration stage times: ray casting, the photometric pass, smoothing and the update
 // run once an iteration (a level of 0 iterations: one pass that only measures).
 StageTimes PerIteration(const LevelStats& level) {
-  const double passes = std::max(1, level.iterations), steps = passes;
+  const double passes = std::max(1, level.iterations);
   return {level.times.hit_maps_s / passes, level.times.gradient_s / passes,
-          level.times.smoothness_s / steps, level.times.update_s / steps,
+          level.times.smoothness_s / passes, level.times.update_s / passes,
           level.times.intersect_s / passes};
 }
 double Sum(const StageTimes& t) { return t.hit_maps_s + t.gradient_s + t.smoothness_s + t.update_s; }

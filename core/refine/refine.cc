@@ -221,6 +221,14 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
   result->bias_s = SecondsSince(t0);
 }
 
+// Subdivides the faces near creases (FacesToSubdivide), between levels and in CreasePass.
+size_t SubdivideNearCreases(double tolerance_m, TriangleMesh* mesh) {
+  const std::vector<char> subdivide = FacesToSubdivide(*mesh, tolerance_m);
+  *mesh = SubdivideMarked(*mesh, subdivide);
+  SortSpatially(mesh);
+  return size_t(std::count(subdivide.begin(), subdivide.end(), 1));
+}
+
 // Step 4b, RefineOptions::crease_pass: level 0 run again from its result with the faces
 // near its creases subdivided (FacesToSubdivide at flat_tolerance_gsd, as between levels,
 // where a job without coarser levels gave its walls 2-pixel triangles only). On the DSM's
@@ -234,22 +242,18 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 // 0.332 / 0.345 / 0.328 m, facades +0.8 to +1.6 points; ResolveCreasePass).
 void CreasePass(const LevelContext& ctx, TriangleMesh* mesh, RefineResult* result) {
   const double tolerance_m = ctx.options.flat_tolerance_gsd * ctx.gsd_m;
-  const std::vector<char> subdivide = FacesToSubdivide(*mesh, tolerance_m);
   const size_t faces_before = mesh->num_faces();
-  *mesh = SubdivideMarked(*mesh, subdivide);
-  SortSpatially(mesh);
+  const size_t subdivided = SubdivideNearCreases(tolerance_m, mesh);
   spdlog::info("level 0, creases: {} of {} faces subdivided where a vertex is off its "
                "neighbours' plane by more than {:.2f} m ({} faces)",
-               std::count(subdivide.begin(), subdivide.end(), 1), faces_before, tolerance_m,
-               mesh->num_faces());
+               subdivided, faces_before, tolerance_m, mesh->num_faces());
   LevelStats stats;
   RefineLevel(ctx, 0, std::numeric_limits<double>::quiet_NaN(), mesh, &stats);
   stats.crease_pass = true;
   result->levels.push_back(std::move(stats));
 }
 
-// RefineOptions::crease_pass resolved: -1 is on for a DSM start without coarser levels
-// whose selection has more than one pair.
+// crease_pass -1: on for a DSM start without coarser levels and with more than one pair.
 int ResolveCreasePass(const RefineOptions& options, bool initial_is_mesh, size_t num_pairs) {
   if (options.crease_pass >= 0) return options.crease_pass;
   return options.levels == 0 && !initial_is_mesh && num_pairs > 1 ? 1 : 0;
@@ -273,8 +277,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
       options.levels == 0 && level0_start
           ? std::move(*level0_start)
           : LevelStartMesh(input, options, views, result->pairs, result->gsd_m, progress, options.levels);
-  // With a crease pass, the levels report the first (levels + 1) / (levels + 2) of the
-  // progress, the pass the rest.
+  // With a crease pass the levels report (levels + 1) / (levels + 2) of the progress.
   const int parts = options.levels + 1 + (options.crease_pass > 0 ? 1 : 0);
   const auto part_of = [&progress, parts, levels = options.levels](int offset) {
     return Progress{[&progress, parts, levels, offset](double f, const std::string& stage) {
@@ -308,15 +311,12 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
       spdlog::info("level {}: the initial surface remeshed ({} faces), moved as level {} moved it",
                    level, mesh.num_faces(), level + 1);
     } else if (level < options.levels) {
-      const std::vector<char> subdivide =
-          FacesToSubdivide(mesh, options.flat_tolerance_gsd * result->gsd_m * std::ldexp(1.0, level + 1));
       const size_t faces_before = mesh.num_faces();
-      mesh = SubdivideMarked(mesh, subdivide);
+      const size_t subdivided = SubdivideNearCreases(
+          options.flat_tolerance_gsd * result->gsd_m * std::ldexp(1.0, level + 1), &mesh);
       if (options.flat_tolerance_gsd > 0)
-        spdlog::info("level {}: {} of {} faces subdivided ({} -> {} faces)", level,
-                     std::count(subdivide.begin(), subdivide.end(), 1), faces_before,
-                     faces_before, mesh.num_faces());
-      SortSpatially(&mesh);
+        spdlog::info("level {}: {} of {} faces subdivided ({} -> {} faces)", level, subdivided,
+                     faces_before, faces_before, mesh.num_faces());
     } else if (carry) {
       reference = mesh;
     }

@@ -166,27 +166,38 @@ double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sour
                      nullptr, /*sunlit=*/true);
 }
 
+namespace {
+// One rasterized pass: the mean ZNCC and the vertices' height sigma (LevelMeasure); sunlit as
+// MeasurePass.
+LevelMeasure MeasureWithSigma(const RefineInput& input, const std::vector<PreparedView>& sources,
+                              const std::vector<std::pair<int, int>>& pairs,
+                              const RefineOptions& options, double level_gsd_m, int level,
+                              const TriangleMesh& mesh, bool sunlit) {
+  std::vector<double> information;
+  LevelMeasure out;
+  out.mean_zncc = MeasurePass(input, sources, pairs, options, level_gsd_m, level, mesh,
+                              /*rasterize=*/true, &information, sunlit);
+  out.height_sigma = HeightSigmaFromInformation(information, MeanNoiseVariance(sources, level));
+  return out;
+}
+}  // namespace
+
 std::vector<float> LevelHeightSigma(const RefineInput& input,
                                     const std::vector<PreparedView>& sources,
                                     const std::vector<std::pair<int, int>>& pairs,
                                     const RefineOptions& options, double level_gsd_m, int level,
                                     const TriangleMesh& mesh) {
-  std::vector<double> information;
-  MeasurePass(input, sources, pairs, options, level_gsd_m, level, mesh, /*rasterize=*/true,
-              &information);
-  return HeightSigmaFromInformation(information, MeanNoiseVariance(sources, level));
+  return MeasureWithSigma(input, sources, pairs, options, level_gsd_m, level, mesh,
+                          /*sunlit=*/false)
+      .height_sigma;
 }
 
 LevelMeasure MeasureLevel(const RefineInput& input, const std::vector<PreparedView>& sources,
                           const std::vector<std::pair<int, int>>& pairs,
                           const RefineOptions& options, double level_gsd_m, int level,
                           const TriangleMesh& mesh) {
-  std::vector<double> information;
-  LevelMeasure out;
-  out.mean_zncc = MeasurePass(input, sources, pairs, options, level_gsd_m, level, mesh,
-                              /*rasterize=*/true, &information, /*sunlit=*/true);
-  out.height_sigma = HeightSigmaFromInformation(information, MeanNoiseVariance(sources, level));
-  return out;
+  return MeasureWithSigma(input, sources, pairs, options, level_gsd_m, level, mesh,
+                          /*sunlit=*/true);
 }
 
 int PairGroups(int num_pairs, const RefineOptions& options) {
