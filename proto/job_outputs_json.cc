@@ -107,7 +107,8 @@ struct JobRefineSummary {
 JobRefineSummary SummariseTiles(const std::vector<TileResult>& tiles) {
   JobRefineSummary out;
   std::map<std::pair<int, int>, std::pair<StereoPair, int>> pairs;  // by job view index
-  std::map<int, std::pair<LevelStats, std::vector<double>>> levels;    // by level: sum, weight per iteration
+  // by level (its crease pass apart): sum, weight per iteration
+  std::map<std::pair<int, bool>, std::pair<LevelStats, std::vector<double>>> levels;
   int n = 0;
   for (const auto& t : tiles) {
     if (!t.ok) continue;
@@ -129,9 +130,10 @@ JobRefineSummary SummariseTiles(const std::vector<TileResult>& tiles) {
       ++count;
     }
     for (const auto& l : t.refine.levels) {
-      auto& [sum, weight] = levels[l.level];
+      auto& [sum, weight] = levels[{l.level, l.crease_pass}];
       const bool first = weight.empty() && sum.iterations == 0 && sum.num_faces == 0;
       sum.level = l.level;
+      sum.crease_pass = l.crease_pass;
       sum.iterations = std::max(sum.iterations, l.iterations);
       sum.num_vertices += l.num_vertices;
       sum.num_faces += l.num_faces;
@@ -160,17 +162,20 @@ JobRefineSummary SummariseTiles(const std::vector<TileResult>& tiles) {
     out.pairs.push_back({{"views", {key.first, key.second}}, {"angle_deg", sum.angle_deg / count},
                          {"overlap", sum.overlap / count}, {"score", sum.score / count}, {"tiles", count}});
   }
-  for (auto& [level, value] : levels) {
+  for (auto& [key, value] : levels) {
     auto& [sum, weight] = value;
     int tiles_at_level = 0;
     for (const auto& t : tiles)
-      for (const auto& l : t.refine.levels) tiles_at_level += t.ok && l.level == level;
+      for (const auto& l : t.refine.levels)
+        tiles_at_level += t.ok && l.level == key.first && l.crease_pass == key.second;
     sum.gsd_m /= std::max(1, tiles_at_level);
     for (size_t k = 0; k < sum.mean_zncc.size(); ++k) sum.mean_zncc[k] /= weight[k];
     out.levels.push_back(sum);
   }
-  // Coarse to fine, as a tile lists them.
-  std::sort(out.levels.begin(), out.levels.end(), [](const auto& a, const auto& b) { return a.level > b.level; });
+  // Coarse to fine, as a tile lists them (the crease pass after level 0).
+  std::sort(out.levels.begin(), out.levels.end(), [](const auto& a, const auto& b) {
+    return a.level != b.level ? a.level > b.level : !a.crease_pass && b.crease_pass;
+  });
   return out;
 }
 

@@ -200,6 +200,32 @@ TEST_F(TiledJob, AFailingTileIsReportedAndTheOthersFinish) {
   EXPECT_TRUE(o.assembly.seams.size() == 1u);  // 0_0 | 0_1 only
 }
 
+// A tiled job's levels summed over its tiles keep the crease pass apart from level 0 (it
+// ran level 0 again on other faces): one entry each, the faces of each the tiles' sum.
+TEST_F(TiledJob, TheJobsLevelsKeepTheCreasePassApart) {
+  JobSpec spec = Spec();
+  spec.refine.iterations_per_level = 1;
+  spec.refine.crease_pass = 1;
+  const JobOutputs o = RunJob(spec, OutDir("crease"));
+  ASSERT_EQ(o.assembly.tiles_ok, 4);
+  int level0_faces = 0, crease_faces = 0;
+  for (const auto& t : o.tiles) {
+    ASSERT_EQ(t.refine.levels.size(), 3u) << t.name;
+    EXPECT_TRUE(t.refine.levels.back().crease_pass) << t.name;
+    level0_faces += t.refine.levels[1].num_faces;
+    crease_faces += t.refine.levels[2].num_faces;
+  }
+  const nlohmann::json levels = proto::JobMetricsToJson(o)["levels"];
+  ASSERT_EQ(levels.size(), 3u);
+  EXPECT_EQ(levels[1]["level"], 0);
+  EXPECT_EQ(levels[1]["crease_pass"], false);
+  EXPECT_EQ(levels[1]["faces"], level0_faces);
+  EXPECT_EQ(levels[2]["level"], 0);
+  EXPECT_EQ(levels[2]["crease_pass"], true);
+  EXPECT_EQ(levels[2]["faces"], crease_faces);
+  EXPECT_GT(crease_faces, level0_faces);
+}
+
 TEST_F(TiledJob, BiasesAreEstimatedOnceForTheJob) {
   JobSpec spec = Spec();
   spec.refine.estimate_bias = true;  // the scene has none: the estimates stay small
