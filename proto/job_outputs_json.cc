@@ -107,8 +107,14 @@ struct JobRefineSummary {
 JobRefineSummary SummariseTiles(const std::vector<TileResult>& tiles) {
   JobRefineSummary out;
   std::map<std::pair<int, int>, std::pair<StereoPair, int>> pairs;  // by job view index
-  // by level (its crease pass apart): sum, weight per iteration
-  std::map<std::pair<int, bool>, std::pair<LevelStats, std::vector<double>>> levels;
+  // Per level (its crease pass apart): the tiles' sum, the ZNCC curve's weight per
+  // iteration, and how many tiles ran it.
+  struct LevelSum {
+    LevelStats sum;
+    std::vector<double> weight;
+    int tiles = 0;
+  };
+  std::map<std::pair<int, bool>, LevelSum> levels;
   int n = 0;
   for (const auto& t : tiles) {
     if (!t.ok) continue;
@@ -130,8 +136,8 @@ JobRefineSummary SummariseTiles(const std::vector<TileResult>& tiles) {
       ++count;
     }
     for (const auto& l : t.refine.levels) {
-      auto& [sum, weight] = levels[{l.level, l.crease_pass}];
-      const bool first = weight.empty() && sum.iterations == 0 && sum.num_faces == 0;
+      auto& [sum, weight, tiles_at_level] = levels[{l.level, l.crease_pass}];
+      const bool first = tiles_at_level++ == 0;
       sum.level = l.level;
       sum.crease_pass = l.crease_pass;
       sum.iterations = std::max(sum.iterations, l.iterations);
@@ -163,12 +169,8 @@ JobRefineSummary SummariseTiles(const std::vector<TileResult>& tiles) {
                          {"overlap", sum.overlap / count}, {"score", sum.score / count}, {"tiles", count}});
   }
   for (auto& [key, value] : levels) {
-    auto& [sum, weight] = value;
-    int tiles_at_level = 0;
-    for (const auto& t : tiles)
-      for (const auto& l : t.refine.levels)
-        tiles_at_level += t.ok && l.level == key.first && l.crease_pass == key.second;
-    sum.gsd_m /= std::max(1, tiles_at_level);
+    auto& [sum, weight, tiles_at_level] = value;
+    sum.gsd_m /= tiles_at_level;
     for (size_t k = 0; k < sum.mean_zncc.size(); ++k) sum.mean_zncc[k] /= weight[k];
     out.levels.push_back(sum);
   }
