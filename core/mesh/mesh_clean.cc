@@ -6,7 +6,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -19,19 +18,29 @@ namespace {
 // none; a vertex mapped to another is not kept), through a hash of cells of edge
 // kCellsPerDistance x `distance`: a vertex probes only the cells its ball of radius
 // `distance` reaches, about 2 instead of the 27 around cells of edge `distance`. The
-// probes are cache misses into a table of one cell per vertex, and they were most of a
-// tile's clipping and a job's assembly (stereo 0.5 m, 336k vertices: 1.3 s of 21 s,
+// probes are cache misses into a table of about one cell per vertex, and they were most
+// of a tile's clipping and a job's assembly (stereo 0.5 m, 336k vertices: 1.3 s of 21 s,
 // docs/benchmarks-history.md, session 28). The cells' vertices are chained in insertion
 // order (head, tail, next: no allocation per cell).
 std::vector<int> MergeMap(const TriangleMesh& mesh, double distance, size_t* merged) {
   constexpr double kCellsPerDistance = 8;
   const double cell = kCellsPerDistance * distance;
-  const auto key = [](int64_t x, int64_t y, int64_t z) {
-    return uint64_t(x) * 73856093ULL ^ uint64_t(y) * 19349663ULL ^ uint64_t(z) * 83492791ULL;
-  };
   const size_t nv = mesh.vertices.size();
-  std::unordered_map<uint64_t, std::pair<int, int>> cells;  // key -> (head, tail)
-  cells.reserve(nv);
+  // Open addressing (linear probing) over a power-of-two table of at least twice as many
+  // slots as vertices: a probe is one cache miss, where a node-based map took two or more.
+  size_t capacity = 16;
+  while (capacity < 2 * nv) capacity *= 2;
+  const size_t mask = capacity - 1;
+  std::vector<std::array<int64_t, 3>> slot_cell(capacity);
+  std::vector<int> head(capacity, -1), tail(capacity, -1);
+  const auto slot_of = [&](const std::array<int64_t, 3>& c) {
+    uint64_t h = uint64_t(c[0]) * 0x9E3779B97F4A7C15ULL ^ uint64_t(c[1]) * 0xC2B2AE3D27D4EB4FULL ^
+                 uint64_t(c[2]) * 0x165667B19E3779F9ULL;
+    h ^= h >> 29;
+    size_t s = size_t(h) & mask;
+    while (head[s] >= 0 && slot_cell[s] != c) s = (s + 1) & mask;
+    return s;  // the cell's slot, or the empty one where it would go
+  };
   std::vector<int> next(nv, -1);
   std::vector<int> map(nv);
   const double d2 = distance * distance;
@@ -46,28 +55,28 @@ std::vector<int> MergeMap(const TriangleMesh& mesh, double distance, size_t* mer
     int found = -1;
     for (int64_t x = lo[0]; x <= hi[0]; ++x)
       for (int64_t y = lo[1]; y <= hi[1]; ++y)
-        for (int64_t z = lo[2]; z <= hi[2]; ++z) {
-          const auto it = cells.find(key(x, y, z));
-          if (it == cells.end()) continue;
-          for (int j = it->second.first; j >= 0 && (found < 0 || j < found); j = next[j])
+        for (int64_t z = lo[2]; z <= hi[2]; ++z)
+          for (int j = head[slot_of({x, y, z})]; j >= 0 && (found < 0 || j < found); j = next[j])
             if ((mesh.vertices[j].cast<double>() - v).squaredNorm() < d2) {
               found = j;
               break;
             }
-        }
     if (found >= 0) {
       map[i] = found;
       ++*merged;
-    } else {
-      map[i] = int(i);
-      const Eigen::Vector3d c = (v / cell).array().floor();
-      const auto [it, added] = cells.try_emplace(key(int64_t(c.x()), int64_t(c.y()), int64_t(c.z())),
-                                                 int(i), int(i));
-      if (!added) {
-        next[it->second.second] = int(i);
-        it->second.second = int(i);
-      }
+      continue;
     }
+    map[i] = int(i);
+    const std::array<int64_t, 3> c{int64_t(std::floor(v.x() / cell)), int64_t(std::floor(v.y() / cell)),
+                                   int64_t(std::floor(v.z() / cell))};
+    const size_t s = slot_of(c);
+    if (head[s] < 0) {
+      slot_cell[s] = c;
+      head[s] = int(i);
+    } else {
+      next[tail[s]] = int(i);
+    }
+    tail[s] = int(i);
   }
   return map;
 }
