@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <exception>
 #include <functional>
 #include <cstdint>
@@ -86,6 +87,11 @@ std::string CoarseMeshOptions::Check() const {
   if (faces_per_block < 1000)
     return "faces_per_block must be >= 1000, got " + std::to_string(faces_per_block);
   return "";
+}
+
+double GridKeepingTargetEdge(double edge_m, double cell_m) {
+  const double keeps_diagonals = 1.005 * 0.75 * std::sqrt(2.0) * cell_m;
+  return edge_m < keeps_diagonals && edge_m > 0.9 * cell_m ? keeps_diagonals : edge_m;
 }
 
 namespace {

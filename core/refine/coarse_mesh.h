@@ -21,6 +21,16 @@ struct CoarseMeshOptions {
   std::string Check() const;
 };
 
+// The target edge for remeshing a DSM's grid of cell `cell_m` (0: not a grid) to about
+// `edge_m`. CGAL's remesh splits edges longer than 4/3 of the target and collapses those
+// shorter than 4/5 of it. A grid at about the target (a 0.5 m job's 1 m grid, 1.006 m
+// edges) has its legs within those bounds but its diagonals (sqrt(2) x cell) over them, so
+// every flat part is re-triangulated. Where the edge is within 10% under the diagonals'
+// bound it is raised to 1.066 x cell: the flat parts stay as the grid made them and the
+// remesh's work goes to the walls (stereo 0.5 m: the remesh 9.8 -> 5.4 s, 580k -> 477k
+// faces; docs/benchmarks-history.md, session 28). Other edges are returned as they are.
+double GridKeepingTargetEdge(double edge_m, double cell_m);
+
 // Non-manifold faces of the input are dropped (logged). The result depends on the mesh
 // and the options only, not on the number of threads. Throws Error{kInvalidInput} if
 // nothing is left, Error{kCancelled} between remeshing iterations when progress says so.

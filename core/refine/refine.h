@@ -34,6 +34,7 @@ struct RefineInput {
   LocalFrame frame;
   double min_z = 0, max_z = 0;  // height range (frame z) the surface stays within
   double initial_cell_m = 0;    // resolution of the initial surface (DSM cell), 0: unknown
+  double initial_mesh_cell_m = 0;  // initial_mesh's grid cell, m, where it is a DSM's grid; else 0
   bool initial_is_mesh = false;  // the job gave a mesh (RefineOptions::keep_initial_sigmas)
 };
 

@@ -183,6 +183,7 @@ TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
     return std::max(1, int(std::floor(size_m / cell_m)));
   };
   tile.refine.initial_mesh = DsmMeshInFrame(dsm, cell_factor(coarse_cell_m), tile.refine.frame);
+  tile.refine.initial_mesh_cell_m = cell_factor(coarse_cell_m) * cell_m;
   tile.refine.initial_for_edge = [dsm = std::make_shared<const Dsm>(dsm), cell_factor,
                                   frame = tile.refine.frame](double edge_m) {
     return DsmMeshInFrame(*dsm, cell_factor(0.5 * edge_m), frame);

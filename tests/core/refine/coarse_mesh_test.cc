@@ -142,6 +142,40 @@ TEST(RemeshIsotropic, TheResultDoesNotDependOnTheNumberOfThreads) {
   EXPECT_EQ(one.vertices, many.vertices);
 }
 
+// A flat 1 m grid remeshed at about its cell: at 1.006 m (a 0.5 m job's 2-pixel edge)
+// CGAL splits every diagonal and re-triangulates everything; at GridKeepingTargetEdge's
+// edge the grid comes back as it was. A building's walls are remeshed either way.
+TEST(RemeshIsotropic, AGridAtTheGridKeepingEdgeKeepsItsFlatParts) {
+  EXPECT_DOUBLE_EQ(GridKeepingTargetEdge(1.3, 1.0), 1.3);  // far from the cell: kept
+  EXPECT_DOUBLE_EQ(GridKeepingTargetEdge(0.8, 1.0), 0.8);
+  EXPECT_DOUBLE_EQ(GridKeepingTargetEdge(1.006, 0.0), 1.006);
+  const double edge = GridKeepingTargetEdge(1.006, 1.0);
+  EXPECT_NEAR(edge, 1.066, 0.001);
+  EXPECT_GT(4.0 / 3.0 * edge, std::sqrt(2.0));  // the diagonals are under the split bound
+  EXPECT_LT(0.8 * edge, 1.0);                    // the legs over the collapse bound
+  CoarseMeshOptions options;
+  options.faces_per_block = 1000000;  // one piece: the count below is CGAL's alone
+  const TriangleMesh flat = testing::CreateGridMesh(40, 1.0f);
+  options.target_edge_m = 1.006;
+  const size_t resplit = RemeshIsotropic(flat, options).faces.size();
+  options.target_edge_m = edge;
+  const TriangleMesh kept = RemeshIsotropic(flat, options);
+  EXPECT_EQ(kept.faces.size(), flat.faces.size());
+  EXPECT_GT(resplit, flat.faces.size() * 11 / 10);  // every flat part re-triangulated
+  // With a 10 m block on it, the walls' 10 m edges are split to about the target (the
+  // relaxation after the last split stretches a few beyond 4/3 of it).
+  TriangleMesh block = flat;
+  for (auto& v : block.vertices)
+    if (v.x() >= 15 && v.x() <= 25 && v.y() >= 15 && v.y() <= 25) v.z() = 10;
+  const TriangleMesh walls = RemeshIsotropic(block, options);
+  EXPECT_GT(walls.faces.size(), flat.faces.size() + 300);
+  float longest = 0;
+  for (const auto& f : walls.faces)
+    for (int k = 0; k < 3; ++k)
+      longest = std::max(longest, (walls.vertices[f[k]] - walls.vertices[f[(k + 1) % 3]]).norm());
+  EXPECT_LT(longest, 2.0 * edge);
+}
+
 TEST(RemeshIsotropic, RejectsBadOptionsAndEmptyMeshes) {
   const TriangleMesh grid = testing::CreateGridMesh(4, 1.f);
   CoarseMeshOptions bad;
