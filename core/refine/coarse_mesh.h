@@ -25,9 +25,9 @@ struct CoarseMeshOptions {
 // `edge_m`. CGAL's remesh splits edges longer than 4/3 of the target and collapses those
 // shorter than 4/5 of it. A grid at about the target (a 0.5 m job's 1 m grid, 1.006 m
 // edges) has its legs within those bounds but its diagonals (sqrt(2) x cell) over them, so
-// every flat part is re-triangulated. Where the edge is within 10% under the diagonals'
-// bound it is raised to 1.066 x cell: the flat parts stay as the grid made them and the
-// remesh's work goes to the walls (stereo 0.5 m: the remesh 9.8 -> 5.4 s, 580k -> 477k
+// every flat part is re-triangulated. An edge between 0.9 and 1.066 x the cell is raised
+// to 1.066 x the cell, where the diagonals are under the split bound: the flat parts stay
+// as the grid made them and the remesh's work goes to the walls (stereo 0.5 m: the remesh 9.8 -> 5.4 s, 580k -> 477k
 // faces; docs/benchmarks-history.md, session 28). Other edges are returned as they are.
 double GridKeepingTargetEdge(double edge_m, double cell_m);
 
