@@ -27,8 +27,15 @@ struct CoarseMeshOptions {
 // edges) has its legs within those bounds but its diagonals (sqrt(2) x cell) over them, so
 // every flat part is re-triangulated. An edge between 0.9 and 1.066 x the cell is raised
 // to 1.066 x the cell, where the diagonals are under the split bound: the flat parts stay
-// as the grid made them and the remesh's work goes to the walls (stereo 0.5 m: the remesh 9.8 -> 5.4 s, 580k -> 477k
-// faces; docs/benchmarks-history.md, session 28). Other edges are returned as they are.
+// as the grid made them and the remesh's work goes to the walls. Other edges are returned
+// as they are. Stereo 0.5 m s1: the remesh 9.8 -> 5.4 s, 580k -> 477k faces. The refinement
+// (LevelStartMesh) uses it from two pairs on: tri-stereo 0.5 m s1 / s2 roofs 0.333 / 0.346
+// -> 0.321 / 0.333 m, F 42.9 / 49.9 -> 42.6 / 49.9, the job 30.5 / 31.7 -> 27.7 / 26.0 s.
+// One pair keeps the finer remesh of the flat parts (as one pair never takes the grid
+// start, ChooseCoarseStart): there the images add little to the initial surface's detail,
+// and the real Pléiades pairs' held-out ZNCC fell 0.0004-0.0006 with it (stereo 0.5 m s1 /
+// s2: the job 20.1 / 19.6 -> 16.3 / 15.2 s, roofs 0.350 / 0.362 -> 0.353 / 0.357 m, F
+// 41.9 / 47.6 -> 41.7 / 47.5; docs/benchmarks-history.md, session 28).
 double GridKeepingTargetEdge(double edge_m, double cell_m);
 
 // Non-manifold faces of the input are dropped (logged). The result depends on the mesh

@@ -86,9 +86,8 @@ TriangleMesh RemeshForLevel(const RefineInput& input, TriangleMesh mesh,
     if (input.initial_is_mesh || !input.initial_for_edge) return mesh;
     return input.initial_for_edge(2 * LevelEdge(options, gsd_m, level));  // cells of one edge
   }
-  CoarseMeshOptions coarse;
-  coarse.target_edge_m = GridKeepingTargetEdge(LevelEdge(options, gsd_m, level), grid_cell_m);
-  return RemeshIsotropic(mesh, coarse, progress);
+  const double edge_m = GridKeepingTargetEdge(LevelEdge(options, gsd_m, level), grid_cell_m);
+  return RemeshIsotropic(mesh, {.target_edge_m = edge_m}, progress);
 }
 
 // The initial surface meshed for `level` (before remeshing): what a level below the
@@ -114,19 +113,10 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
                           const std::vector<std::pair<int, int>>& pairs, double gsd_m,
                           const Progress& progress, int level, double* median_sigma_m = nullptr) {
   if (median_sigma_m) *median_sigma_m = std::numeric_limits<double>::quiet_NaN();
-  // More than one pair: the remesh keeps the DSM grid's flat parts (GridKeepingTargetEdge).
-  // Tri-stereo 0.5 m s1 / s2: roofs 0.333 / 0.346 -> 0.321 / 0.333 m, facades 26.3 / 29.8
-  // -> 26.2 / 30.1%, F 42.9 / 49.9 -> 42.6 / 49.9, the job 30.5 / 31.7 -> 27.7 / 26.0 s.
-  // One pair keeps the finer remesh of its flat parts (as one pair never takes the grid,
-  // ChooseCoarseStart): there the images add little to the initial surface's detail, and
-  // the real Pléiades pairs' held-out ZNCC fell 0.0004-0.0006 with it (stereo 0.5 m s1 /
-  // s2: the job 20.1 / 19.6 -> 16.3 / 15.2 s, roofs 0.350 / 0.362 -> 0.353 / 0.357 m, F
-  // 41.9 / 47.6 -> 41.7 / 47.5; docs/benchmarks-history.md, session 28).
-  const bool from_initial = level == options.levels;
+  const bool coarsest = level == options.levels;  // GridKeepingTargetEdge from two pairs on
   TriangleMesh mesh = RemeshForLevel(
-      input, from_initial ? input.initial_mesh : InitialSurfaceAt(input, options, gsd_m, level),
-      options, gsd_m, level, progress,
-      from_initial && pairs.size() > 1 ? input.initial_mesh_cell_m : 0.0);
+      input, coarsest ? input.initial_mesh : InitialSurfaceAt(input, options, gsd_m, level),
+      options, gsd_m, level, progress, coarsest && pairs.size() > 1 ? input.initial_mesh_cell_m : 0);
   if (level != 0 || options.grid_start > 0 || !(options.initial_detail_gsd > 0))
     return mesh;
   const double tolerance_m = options.initial_detail_gsd * gsd_m;
