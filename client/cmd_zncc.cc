@@ -8,6 +8,7 @@
 #include "client/command.h"
 #include "core/refine/bias_estimation.h"
 #include "core/refine/refine.h"
+#include "core/refine/surface_comparison.h"
 #include "core/refine/virtual_camera.h"
 
 namespace satmesh::cli {
@@ -41,7 +42,9 @@ int RunZncc(const std::vector<std::string>& argv) {
         "  'initial-filled' (the job's DSM with its holes filled, as the refinement meshes it).\n"
         "  RPC biases: the job's images[].bias; --estimate-bias adds shifts estimated over the\n"
         "  job's INITIAL surface (as `satmesh bias`; pairs: the refinement's, or --bias-pairs),\n"
-        "  so a held-out view is aligned to the initial surface, not to the measured ones.\n");
+        "  so a held-out view is aligned to the initial surface, not to the measured ones.\n"
+        "  Given several surfaces, also each one's mean over the windows every surface counts\n"
+        "  (one support: a surface's own mean averages the windows it makes valid).\n");
     return args.Has("help") ? kExitOk : kExitUsage;
   }
   const JobSpec spec = ReadJobWithOverrides(args.Require("job"), args.GetAll("set"));
@@ -67,15 +70,39 @@ int RunZncc(const std::vector<std::string>& argv) {
     std::printf("pair %d-%d: intersection angle %.2f deg\n", a, b, PairAngleDeg(input.refine, a, b));
   const int level = args.GetInt("level", 0);
 
-  for (const std::string& path : args.GetAll("mesh")) {
-    const TriangleMesh mesh = LoadMeshInFrame(path, spec, input.dsm_crs_wkt, input.refine.frame);
-    std::printf("%s (%zu faces), level %d:", path.c_str(), mesh.num_faces(), level);
+  const std::vector<std::string> paths = args.GetAll("mesh");
+  std::vector<TriangleMesh> meshes;
+  for (const std::string& path : paths) {
+    meshes.push_back(LoadMeshInFrame(path, spec, input.dsm_crs_wkt, input.refine.frame));
+    std::printf("%s (%zu faces), level %d:", path.c_str(), meshes.back().num_faces(), level);
     for (const auto& pair : pairs) {
-      const double zncc = MeasureMeanZncc(input.refine, mesh, {pair}, level, spec.refine);
+      const double zncc = MeasureMeanZncc(input.refine, meshes.back(), {pair}, level, spec.refine);
       std::printf("  %d-%d %.4f", pair.first, pair.second, zncc);
     }
     if (pairs.size() > 1)
-      std::printf("  all %.4f", MeasureMeanZncc(input.refine, mesh, pairs, level, spec.refine));
+      std::printf("  all %.4f", MeasureMeanZncc(input.refine, meshes.back(), pairs, level, spec.refine));
+    std::printf("\n");
+  }
+  if (meshes.size() < 2) return kExitOk;
+  // The same surfaces over one support: the windows every surface counts (each surface's
+  // own mean above averages the windows it makes valid; surface_comparison.h).
+  const auto common = CommonWindowZncc(input.refine, meshes, pairs, level, spec.refine);
+  std::printf("over the windows every surface counts:");
+  long total = 0;
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    std::printf("  %d-%d %ld", pairs[k].first, pairs[k].second, common[0][k].windows);
+    total += common[0][k].windows;
+  }
+  std::printf("\n");
+  for (size_t s = 0; s < meshes.size(); ++s) {
+    std::printf("%s (%zu faces), level %d, common windows:", paths[s].c_str(),
+                meshes[s].num_faces(), level);
+    double sum = 0;
+    for (size_t k = 0; k < pairs.size(); ++k) {
+      std::printf("  %d-%d %.4f", pairs[k].first, pairs[k].second, common[s][k].mean_zncc);
+      sum += common[s][k].mean_zncc * double(common[s][k].windows);
+    }
+    if (pairs.size() > 1) std::printf("  all %.4f", total > 0 ? sum / double(total) : 0.0);
     std::printf("\n");
   }
   return kExitOk;

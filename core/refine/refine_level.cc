@@ -56,7 +56,8 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
                        const PhotometricOptions& options, std::vector<PassScratch>* scratch,
                        std::vector<Eigen::Vector3d>* gradient, std::vector<int>* seen,
                        int one_direction = -1, std::vector<double>* information = nullptr,
-                       std::vector<PairEnergy>* energies = nullptr) {
+                       std::vector<PairEnergy>* energies = nullptr,
+                       std::vector<std::vector<float>>* windows = nullptr) {
   // one_direction >= 0: pair k only as (i, j) if (one_direction + k) is even, else (j, i).
   std::vector<std::pair<int, int>> directions;
   for (size_t k = 0; k < pairs.size(); ++k) {
@@ -70,6 +71,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
   long count = 0;
   if (scratch->size() < size_t(omp_get_max_threads())) scratch->resize(omp_get_max_threads());
   if (energies) energies->assign(directions.size(), PairEnergy{});
+  if (windows) windows->assign(directions.size(), {});
 #pragma omp parallel
   {
     PassScratch& own = (*scratch)[omp_get_thread_num()];
@@ -85,6 +87,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
       sum += e.sum_zncc;
       count += e.num_windows;
       if (energies) (*energies)[d] = e;
+      if (windows) (*windows)[d] = std::move(workspace.field.windows);
     }
     if (accumulate) {
 #pragma omp critical
@@ -131,7 +134,8 @@ std::vector<Eigen::Vector3f> SunsToMask(const RefineInput& input, const RefineOp
 double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& sources,
                    const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
                    double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize,
-                   std::vector<double>* information = nullptr, bool sunlit = false) {
+                   std::vector<double>* information = nullptr, bool sunlit = false,
+                   std::vector<std::vector<float>>* windows = nullptr) {
   std::vector<int> slot;
   std::vector<ViewLevel> views =
       MakeViewLevels(input, sources, pairs, mesh, level, options.virtual_camera_grid_px, &slot);
@@ -144,6 +148,7 @@ double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& so
     for (auto& v : views) CastHitMap(scene, &v, &normals);
   }
   PhotometricOptions photo = PhotometricOptionsAt(options, level_gsd_m, MeanNoiseVariance(sources, level));
+  photo.zncc.keep_windows = windows != nullptr;
   // sunlit: moving shadows left out as the level's iterations leave them out (sunlit_pairs),
   // so that a ZNCC measured here compares with theirs.
   const std::vector<Eigen::Vector3f> suns = sunlit ? SunsToMask(input, options) : std::vector<Eigen::Vector3f>{};
@@ -154,7 +159,7 @@ double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& so
   std::vector<PassScratch> scratch;
   if (information) information->assign(mesh.num_vertices(), 0.0);
   return PhotometricPass(views, slot, pairs, mesh, normals, photo, &scratch, nullptr, nullptr,
-                         /*one_direction=*/-1, information);
+                         /*one_direction=*/-1, information, nullptr, windows);
 }
 
 }  // namespace
@@ -164,6 +169,17 @@ double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sour
                  double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize) {
   return MeasurePass(input, sources, pairs, options, level_gsd_m, level, mesh, rasterize,
                      nullptr, /*sunlit=*/true);
+}
+
+std::vector<std::vector<float>> LevelWindowZncc(const RefineInput& input,
+                                                const std::vector<PreparedView>& sources,
+                                                const std::vector<std::pair<int, int>>& pairs,
+                                                const RefineOptions& options, double level_gsd_m,
+                                                int level, const TriangleMesh& mesh) {
+  std::vector<std::vector<float>> windows;
+  MeasurePass(input, sources, pairs, options, level_gsd_m, level, mesh, /*rasterize=*/false,
+              nullptr, /*sunlit=*/true, &windows);
+  return windows;
 }
 
 namespace {

@@ -52,6 +52,15 @@ double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sour
                  const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
                  double level_gsd_m, int level, const TriangleMesh& mesh, bool rasterize);
 
+// LevelZncc's pass (Embree), keeping each window's ZNCC: per direction d of the pairs
+// (d = 2k: pair k as (i, j), view i's pixels; d = 2k + 1: as (j, i)), view i's level image
+// of window ZNCCs, NaN where the window is not counted.
+std::vector<std::vector<float>> LevelWindowZncc(const RefineInput& input,
+                                                const std::vector<PreparedView>& sources,
+                                                const std::vector<std::pair<int, int>>& pairs,
+                                                const RefineOptions& options, double level_gsd_m,
+                                                int level, const TriangleMesh& mesh);
+
 // The images' height sigma of each vertex of `mesh` at `level` (metres; +inf where no
 // pair sees it): one photometric pass over both directions of every pair, gathering the
 // Fisher information (HeightSigmaFromInformation), without changing anything.

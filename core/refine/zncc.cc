@@ -361,6 +361,8 @@ void ComputeZnccFieldInto(const std::vector<float>& a_image, const std::vector<f
 
   double sum_zncc = 0;
   long num_windows = 0;
+  if (options.keep_windows) field.windows.assign(size_t(w) * h, std::nanf(""));
+  else field.windows.clear();
   for (int k = 0; k < std::min(r, h); ++k) centre(k);
   for (int t = 0; t < h + r; ++t) {
     // Window statistics of row t: derivative coefficients into the ring.
@@ -377,6 +379,12 @@ void ComputeZnccFieldInto(const std::vector<float>& a_image, const std::vector<f
         num_windows += Coefficients(sums + x0, row_stride, sigma_ab + x0, centred(t) + x0, n, eps,
                                     min_count, zncc + x0, coefficients(t) + x0, row_stride);
         sum_zncc += RowSum(zncc + x0, n);
+        if (options.keep_windows) {  // the windows Coefficients counted
+          const float* m = centred(t);
+          float* out = &field.windows[size_t(t) * w];
+          for (int x = x0; x < x1; ++x)
+            if (m[x] != 0.f && sums[x] >= min_count) out[x] = zncc[x];
+        }
       }
     }
     // ∂M/∂b of row y = t - r from the coefficients of rows y-r..y+r.

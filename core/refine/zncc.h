@@ -14,12 +14,15 @@ struct ZnccOptions {
   int window_radius = 2;            // window (2r+1)², r >= 1
   double min_valid_fraction = 0.5;  // windows with fewer valid pixels are skipped, (0, 1]
   double variance_floor = 1e-4;     // added to σ_a² and σ_b² (differentiably), > 0
+  bool keep_windows = false;        // also fill ZnccField::windows (comparing surfaces)
 };
 
 struct ZnccField {
   std::vector<float> dM_db;  // ∂M/∂b per pixel (0 where invalid)
   double sum_zncc = 0;       // Σ ZNCC over the counted windows (M = -sum_zncc)
   long num_windows = 0;
+  std::vector<float> windows;  // keep_windows: each pixel's window ZNCC, NaN where that
+                               // window is not counted; else empty
 };
 
 // Scratch rows, reused across calls (the computation streams over rows: its working set

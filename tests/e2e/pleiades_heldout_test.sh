@@ -4,7 +4,9 @@
 # bias`) and then kept fixed; each 2-view subset is refined from the s2p DSM (defaults,
 # estimate_bias off, so the three runs share one block), and `satmesh zncc` measures every
 # pair's ZNCC, the held-out view's two pairs included, through the DSM (holes filled, as
-# the refinement meshes it) and through each result.
+# the refinement meshes it) and through each result. The checks compare the surfaces over
+# the windows every one of them counts (`satmesh zncc`'s second table): a surface's own
+# mean averages the windows it makes valid, another support for each surface.
 #
 # usage: pleiades_heldout_test.sh SATMESH [DATA_DIR] [--keep DIR] [--max-fall F]
 #                                 [--max-mean-fall F] [--set k=v ...]
@@ -66,15 +68,26 @@ done
 python3 - "$work/zncc.log" "$max_fall" "$max_mean_fall" <<'PY'
 import re, sys
 log, max_fall, max_mean_fall = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
-zncc = {}
+own, common = {}, {}
 for line in open(log):
-    m = re.match(r"(\S+) \(\d+ faces\), level 0:\s+(.*)\s+all", line)
+    m = re.match(r"(\S+) \(\d+ faces\), level 0(, common windows)?:\s+(.*)\s+all", line)
     if m:
         name = m.group(1).rstrip("/").split("/")[-1]
-        zncc[name] = {p: float(v) for p, v in re.findall(r"(\d-\d) ([0-9.]+)", m.group(2))}
-start = zncc.get("initial-filled")
-assert start and len(zncc) == 4, f"could not read the ZNCC table from {log}"
+        table = common if m.group(2) else own
+        table[name] = {p: float(v) for p, v in re.findall(r"(\d-\d) ([0-9.]+)", m.group(3))}
+assert len(own) == 4 and len(common) == 4, f"could not read the ZNCC tables from {log}"
+print("Each surface over its own windows (not one support; not checked):")
+print("held out | its pairs | s2p DSM (holes filled) | refined with the other two | change")
+for held, result in ((2, "r_01_02"), (1, "r_01_03"), (0, "r_02_03")):
+    pairs = [p for p in ("0-2", "1-2", "0-1") if str(held) in p]
+    before = [own["initial-filled"][p] for p in pairs]
+    after = [own[result][p] for p in pairs]
+    print(f"img_0{held + 1} | {' / '.join(pairs)} | {' / '.join(f'{b:.4f}' for b in before)} | "
+          f"{' / '.join(f'{a:.4f}' for a in after)} | "
+          f"{' / '.join(f'{a - b:+.4f}' for a, b in zip(after, before))}")
+zncc, start = common, common["initial-filled"]
 failures = []
+print("Over the windows every surface counts (checked):")
 print("held out | its pairs | s2p DSM (holes filled) | refined with the other two | change")
 for held, result in ((2, "r_01_02"), (1, "r_01_03"), (0, "r_02_03")):
     pairs = [p for p in ("0-2", "1-2", "0-1") if str(held) in p]

@@ -20,6 +20,7 @@ ZnccField ReferenceField(const std::vector<float>& a, const std::vector<float>& 
   const int r = o.window_radius, n_full = (2 * r + 1) * (2 * r + 1);
   ZnccField f;
   f.dM_db.assign(size_t(w) * h, 0.f);
+  f.windows.assign(size_t(w) * h, std::nanf(""));
   std::vector<double> dM(size_t(w) * h, 0.0);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
@@ -39,6 +40,7 @@ ZnccField ReferenceField(const std::vector<float>& a, const std::vector<float>& 
       const double zncc = (sab / n - mu_a * mu_b) / std::sqrt(var_a * var_b);
       f.sum_zncc += zncc;
       ++f.num_windows;
+      f.windows[size_t(y) * w + x] = float(zncc);
       for (int v = std::max(0, y - r); v <= std::min(h - 1, y + r); ++v)
         for (int u = std::max(0, x - r); u <= std::min(w - 1, x + r); ++u) {
           const int q = v * w + u;
@@ -105,10 +107,23 @@ void ExpectMatchesDirectEvaluation(const std::vector<float>& a, const std::vecto
     ZnccOptions o;
     o.window_radius = r;
     o.variance_floor = 1e-3;
+    o.keep_windows = r != 2;  // the windows kept or not: the same field
     ZnccWorkspace ws;
     if (dirty_workspace) ComputeZnccField(b, a, valid, w, h, o, &ws);
     const ZnccField f = ComputeZnccField(a, b, valid, w, h, o, &ws);
     const ZnccField ref = ReferenceField(a, b, valid, w, h, o);
+    if (o.keep_windows) {  // each counted window's ZNCC, NaN exactly where none is counted
+      ASSERT_EQ(f.windows.size(), ref.windows.size());
+      for (int p = 0; p < w * h; ++p) {
+        ASSERT_EQ(std::isnan(f.windows[p]), std::isnan(ref.windows[p]))
+            << "radius " << r << " pixel " << p;
+        if (!std::isnan(ref.windows[p])) {
+          ASSERT_NEAR(f.windows[p], ref.windows[p], 1e-4) << "radius " << r << " pixel " << p;
+        }
+      }
+    } else {
+      EXPECT_TRUE(f.windows.empty());
+    }
     ASSERT_EQ(f.num_windows, ref.num_windows) << "radius " << r;
     EXPECT_NEAR(f.sum_zncc, ref.sum_zncc, 1e-5 * ref.num_windows) << "radius " << r;
     float max_abs = 0;
