@@ -2,6 +2,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <cstdlib>
 
 #include "client/args.h"
 #include "client/command.h"
@@ -18,7 +19,7 @@ int RunSynth(const std::vector<std::string>& argv) {
         "usage: satmesh synth --out DIR [--preset small|default|large] [--seed N]\n"
         "                     [--views stereo|tristereo|multidate|jax] [--num-views N]\n"
         "                     [--gsd M] [--size-m M] [--rpc-bias-px SIGMA] [--no-trees]\n"
-        "                     [--no-preview]\n"
+        "                     [--convergence-deg MIN,MAX] [--no-preview]\n"
         "Writes images/*.tif (UInt16, RPC, IMD acquisition metadata), truth/, initial/dsm.tif,\n"
         "scene.json, job.json, preview.png.\n"
         "  --preset P       scene size: small (72 m, for tests), default (300 m), large (750 m)\n"
@@ -34,7 +35,10 @@ int RunSynth(const std::vector<std::string>& argv) {
         "  --num-views N    number of passes of multidate/jax, [2, 64]\n"
         "  --gsd M          ground sample distance and grid cell, m (e.g. 0.3, 0.5; default 0.3)\n"
         "  --size-m M       side of the square AOI, m (default: the preset's)\n"
-        "  --rpc-bias-px S  per-image RPC bias sigma, px (default: 1 for multidate/jax, 0 for one pass)\n");
+        "  --rpc-bias-px S  per-image RPC bias sigma, px (default: 1 for multidate/jax, 0 for one pass)\n"
+        "  --convergence-deg MIN,MAX  one pass: the range the convergence is drawn from (stereo:\n"
+        "                   the pair's, default 15,35; tristereo: each outer view's with the middle\n"
+        "                   one, default 6,15); e.g. 7,12 a Pleiades narrow pair, 30,45 WorldView\n");
     return kExitOk;
   }
   const std::string out = args.Require("out");
@@ -55,6 +59,29 @@ int RunSynth(const std::vector<std::string>& argv) {
                   "option --num-views applies to multidate and jax (" + synth::AcquisitionName(a) +
                       " has a fixed number of views)");
     options.views.num_views = args.GetInt("num-views", options.views.num_views);
+  }
+  if (args.Has("convergence-deg")) {
+    const std::string range = args.Require("convergence-deg");
+    char* end = nullptr;
+    const double lo = std::strtod(range.c_str(), &end);
+    bool parsed = end != range.c_str() && *end == ',';
+    const char* second = parsed ? end + 1 : end;
+    const double hi = std::strtod(second, &end);
+    parsed = parsed && end != second && *end == '\0';
+    SATMESH_CHECK(parsed, ErrorCode::kInvalidArgument,
+                  "option --convergence-deg: expected MIN,MAX in degrees, got '" + range + "'");
+    const auto a = options.views.acquisition;
+    SATMESH_CHECK(a == synth::Acquisition::kStereo || a == synth::Acquisition::kTriStereo,
+                  ErrorCode::kInvalidArgument,
+                  "option --convergence-deg applies to one pass, stereo and tristereo (" +
+                      synth::AcquisitionName(a) + " draws its views from the off-nadir range)");
+    if (a == synth::Acquisition::kStereo) {
+      options.views.stereo_min_convergence_deg = lo;
+      options.views.stereo_max_convergence_deg = hi;
+    } else {
+      options.views.tristereo_min_convergence_deg = lo;
+      options.views.tristereo_max_convergence_deg = hi;
+    }
   }
   options.gsd_m = args.GetDouble("gsd", options.gsd_m);
   options.city.aoi_size_m = args.GetDouble("size-m", options.city.aoi_size_m);
