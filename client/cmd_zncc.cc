@@ -72,39 +72,37 @@ int RunZncc(const std::vector<std::string>& argv) {
 
   const std::vector<std::string> paths = args.GetAll("mesh");
   std::vector<TriangleMesh> meshes;
-  for (const std::string& path : paths) {
+  for (const std::string& path : paths)
     meshes.push_back(LoadMeshInFrame(path, spec, input.dsm_crs_wkt, input.refine.frame));
-    std::printf("%s (%zu faces), level %d:", path.c_str(), meshes.back().num_faces(), level);
-    for (const auto& pair : pairs) {
-      const double zncc = MeasureMeanZncc(input.refine, meshes.back(), {pair}, level, spec.refine);
-      std::printf("  %d-%d %.4f", pair.first, pair.second, zncc);
+  // One pass a surface gives both tables: each surface's mean over the windows it makes
+  // valid, and (several surfaces) over the windows every surface counts, one support
+  // (surface_comparison.h).
+  const auto zncc = CommonWindowZncc(input.refine, meshes, pairs, level, spec.refine);
+  const auto print_table = [&](bool common) {
+    for (size_t s = 0; s < meshes.size(); ++s) {
+      std::printf("%s (%zu faces), level %d%s:", paths[s].c_str(), meshes[s].num_faces(), level,
+                  common ? ", common windows" : "");
+      double sum = 0;
+      long count = 0;
+      for (size_t k = 0; k < pairs.size(); ++k) {
+        const PairComparison& c = zncc[s][k];
+        const double mean = common ? c.mean_zncc : c.own_mean_zncc;
+        const long windows = common ? c.windows : c.own_windows;
+        std::printf("  %d-%d %.4f", pairs[k].first, pairs[k].second, mean);
+        sum += mean * double(windows);
+        count += windows;
+      }
+      if (pairs.size() > 1) std::printf("  all %.4f", count > 0 ? sum / double(count) : 0.0);
+      std::printf("\n");
     }
-    if (pairs.size() > 1)
-      std::printf("  all %.4f", MeasureMeanZncc(input.refine, meshes.back(), pairs, level, spec.refine));
-    std::printf("\n");
-  }
+  };
+  print_table(/*common=*/false);
   if (meshes.size() < 2) return kExitOk;
-  // The same surfaces over one support: the windows every surface counts (each surface's
-  // own mean above averages the windows it makes valid; surface_comparison.h).
-  const auto common = CommonWindowZncc(input.refine, meshes, pairs, level, spec.refine);
   std::printf("over the windows every surface counts:");
-  long total = 0;
-  for (size_t k = 0; k < pairs.size(); ++k) {
-    std::printf("  %d-%d %ld", pairs[k].first, pairs[k].second, common[0][k].windows);
-    total += common[0][k].windows;
-  }
+  for (size_t k = 0; k < pairs.size(); ++k)
+    std::printf("  %d-%d %ld", pairs[k].first, pairs[k].second, zncc[0][k].windows);
   std::printf("\n");
-  for (size_t s = 0; s < meshes.size(); ++s) {
-    std::printf("%s (%zu faces), level %d, common windows:", paths[s].c_str(),
-                meshes[s].num_faces(), level);
-    double sum = 0;
-    for (size_t k = 0; k < pairs.size(); ++k) {
-      std::printf("  %d-%d %.4f", pairs[k].first, pairs[k].second, common[s][k].mean_zncc);
-      sum += common[s][k].mean_zncc * double(common[s][k].windows);
-    }
-    if (pairs.size() > 1) std::printf("  all %.4f", total > 0 ? sum / double(total) : 0.0);
-    std::printf("\n");
-  }
+  print_table(/*common=*/true);
   return kExitOk;
 }
 

@@ -24,23 +24,34 @@ std::vector<std::vector<PairComparison>> CommonWindowZncc(
 
   std::vector<std::vector<PairComparison>> out(surfaces.size(),
                                                std::vector<PairComparison>(pairs.size()));
-  std::vector<double> sum(surfaces.size());
+  std::vector<double> sum(surfaces.size()), own_sum(surfaces.size());
+  std::vector<long> own_count(surfaces.size());
   for (size_t k = 0; k < pairs.size(); ++k) {
     std::fill(sum.begin(), sum.end(), 0.0);
+    std::fill(own_sum.begin(), own_sum.end(), 0.0);
+    std::fill(own_count.begin(), own_count.end(), 0);
     long count = 0;
     for (size_t d : {2 * k, 2 * k + 1}) {
       const size_t n = windows[0][d].size();
       for (size_t p = 0; p < n; ++p) {
         bool everywhere = true;
-        for (size_t s = 0; s < surfaces.size() && everywhere; ++s)
-          everywhere = !std::isnan(windows[s][d][p]);
+        for (size_t s = 0; s < surfaces.size(); ++s) {
+          const float z = windows[s][d][p];
+          if (std::isnan(z)) {
+            everywhere = false;
+            continue;
+          }
+          own_sum[s] += z;
+          ++own_count[s];
+        }
         if (!everywhere) continue;
         for (size_t s = 0; s < surfaces.size(); ++s) sum[s] += windows[s][d][p];
         ++count;
       }
     }
     for (size_t s = 0; s < surfaces.size(); ++s)
-      out[s][k] = {count > 0 ? sum[s] / double(count) : 0.0, count};
+      out[s][k] = {count > 0 ? sum[s] / double(count) : 0.0, count,
+                   own_count[s] > 0 ? own_sum[s] / double(own_count[s]) : 0.0, own_count[s]};
   }
   return out;
 }

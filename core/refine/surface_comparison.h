@@ -16,11 +16,14 @@ namespace satmesh {
 struct PairComparison {
   double mean_zncc = 0;  // over the windows every surface counts, both directions
   long windows = 0;      // how many (the same for every surface)
+  double own_mean_zncc = 0;  // over the windows this surface counts (MeasureMeanZncc's)
+  long own_windows = 0;
 };
 
 // result[s][k]: surface s (in input.frame) over pair k at pyramid level `level`, through the
 // pass MeasureMeanZncc runs (Embree hit maps, moving shadows left out as the refinement
-// leaves them out), on the windows of pair k's two directions that every surface counts.
+// leaves them out), on the windows of pair k's two directions that every surface counts,
+// and on those it counts itself (one pass a surface gives both).
 std::vector<std::vector<PairComparison>> CommonWindowZncc(
     const RefineInput& input, const std::vector<TriangleMesh>& surfaces,
     const std::vector<std::pair<int, int>>& pairs, int level, const RefineOptions& options = {});

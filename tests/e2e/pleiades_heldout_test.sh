@@ -76,26 +76,23 @@ for line in open(log):
         table = common if m.group(2) else own
         table[name] = {p: float(v) for p, v in re.findall(r"(\d-\d) ([0-9.]+)", m.group(3))}
 assert len(own) == 4 and len(common) == 4, f"could not read the ZNCC tables from {log}"
-print("Each surface over its own windows (not one support; not checked):")
-print("held out | its pairs | s2p DSM (holes filled) | refined with the other two | change")
-for held, result in ((2, "r_01_02"), (1, "r_01_03"), (0, "r_02_03")):
-    pairs = [p for p in ("0-2", "1-2", "0-1") if str(held) in p]
-    before = [own["initial-filled"][p] for p in pairs]
-    after = [own[result][p] for p in pairs]
-    print(f"img_0{held + 1} | {' / '.join(pairs)} | {' / '.join(f'{b:.4f}' for b in before)} | "
-          f"{' / '.join(f'{a:.4f}' for a in after)} | "
-          f"{' / '.join(f'{a - b:+.4f}' for a, b in zip(after, before))}")
-zncc, start = common, common["initial-filled"]
+def held_out_rows(table, title):
+    """Prints the table's held-out rows; yields (held, pairs, before, after) of each."""
+    print(title)
+    print("held out | its pairs | s2p DSM (holes filled) | refined with the other two | change")
+    for held, result in ((2, "r_01_02"), (1, "r_01_03"), (0, "r_02_03")):
+        pairs = [p for p in ("0-2", "1-2", "0-1") if str(held) in p]
+        before = [table["initial-filled"][p] for p in pairs]
+        after = [table[result][p] for p in pairs]
+        print(f"img_0{held + 1} | {' / '.join(pairs)} | {' / '.join(f'{b:.4f}' for b in before)} | "
+              f"{' / '.join(f'{a:.4f}' for a in after)} | "
+              f"{' / '.join(f'{a - b:+.4f}' for a, b in zip(after, before))}")
+        yield held, pairs, before, after
+for _ in held_out_rows(own, "Each surface over its own windows (not one support; not checked):"):
+    pass
 failures = []
-print("Over the windows every surface counts (checked):")
-print("held out | its pairs | s2p DSM (holes filled) | refined with the other two | change")
-for held, result in ((2, "r_01_02"), (1, "r_01_03"), (0, "r_02_03")):
-    pairs = [p for p in ("0-2", "1-2", "0-1") if str(held) in p]
-    before = [start[p] for p in pairs]
-    after = [zncc[result][p] for p in pairs]
+for held, pairs, before, after in held_out_rows(common, "Over the windows every surface counts (checked):"):
     change = [a - b for a, b in zip(after, before)]
-    print(f"img_0{held + 1} | {' / '.join(pairs)} | {' / '.join(f'{b:.4f}' for b in before)} | "
-          f"{' / '.join(f'{a:.4f}' for a in after)} | {' / '.join(f'{c:+.4f}' for c in change)}")
     mean_change = (sum(after) - sum(before)) / 2
     if not (mean_change > 0 if max_mean_fall == 0 else mean_change >= -max_mean_fall):
         failures.append(f"held out img_0{held + 1}: the mean of its pairs "

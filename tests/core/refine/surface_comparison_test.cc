@@ -28,7 +28,8 @@ TriangleMesh WestHalf(const TriangleMesh& mesh) {
   return half;
 }
 
-// One surface alone: its windows are its own, and its means are MeasureMeanZncc's.
+// One surface alone: its windows are its own, and its means (common and own) are
+// MeasureMeanZncc's.
 TEST(CommonWindowZncc, OneSurfaceGivesItsOwnMean) {
   const Plane plane;
   const TriangleMesh exact = PlaneMesh(plane, 40, 1.0, 0.0);
@@ -38,6 +39,8 @@ TEST(CommonWindowZncc, OneSurfaceGivesItsOwnMean) {
   ASSERT_EQ(common[0].size(), kPairs.size());
   for (size_t k = 0; k < kPairs.size(); ++k) {
     EXPECT_NEAR(common[0][k].mean_zncc, MeasureMeanZncc(input, exact, {kPairs[k]}, 0), 1e-4);
+    EXPECT_EQ(common[0][k].own_mean_zncc, common[0][k].mean_zncc);
+    EXPECT_EQ(common[0][k].own_windows, common[0][k].windows);
     EXPECT_GT(common[0][k].windows, 2 * 100 * 100);  // two directions over the 80 m plane
   }
 }
@@ -62,6 +65,11 @@ TEST(CommonWindowZncc, SurfacesAreComparedWhereBothAre) {
     EXPECT_GT(both[0][k].windows, whole[0][k].windows * 4 / 10);
     EXPECT_LT(both[0][k].windows, whole[0][k].windows * 6 / 10);
     EXPECT_NEAR(both[0][k].mean_zncc, both[1][k].mean_zncc, 0.01);
+    // each surface's own windows and mean, as measured alone
+    EXPECT_EQ(both[0][k].own_windows, whole[0][k].windows);
+    EXPECT_EQ(both[1][k].own_windows, alone[0][k].windows);
+    EXPECT_NEAR(both[0][k].own_mean_zncc, whole[0][k].mean_zncc, 1e-9);
+    EXPECT_NEAR(both[1][k].own_mean_zncc, alone[0][k].mean_zncc, 1e-9);
   }
 }
 
