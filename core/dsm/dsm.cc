@@ -367,4 +367,27 @@ Dsm HeightSigmaFromMesh(const TriangleMesh& mesh, const Dsm& grid) {
       /*retry_boundary=*/false);
 }
 
+double DsmCellNoise(const Dsm& dsm) {
+  std::vector<float> d;
+  d.reserve(2 * dsm.z.size());
+  const auto add = [&](float a, float b, float c) {
+    const float v = a - 2 * b + c;
+    if (std::isfinite(v)) d.push_back(v);
+  };
+  for (int j = 0; j < dsm.height; ++j)
+    for (int i = 0; i < dsm.width; ++i) {
+      if (i > 0 && i + 1 < dsm.width) add(dsm.at(i - 1, j), dsm.at(i, j), dsm.at(i + 1, j));
+      if (j > 0 && j + 1 < dsm.height) add(dsm.at(i, j - 1), dsm.at(i, j), dsm.at(i, j + 1));
+    }
+  if (d.size() < 100) return std::numeric_limits<double>::quiet_NaN();
+  const auto median = [](std::vector<float>* v) {
+    auto mid = v->begin() + long(v->size() / 2);
+    std::nth_element(v->begin(), mid, v->end());
+    return double(*mid);
+  };
+  const double centre = median(&d);
+  for (float& v : d) v = float(std::abs(v - centre));
+  return 1.4826 * median(&d) / std::sqrt(6.0);
+}
+
 }  // namespace satmesh

@@ -49,4 +49,13 @@ Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid);
 // carry height_sigma.
 Dsm HeightSigmaFromMesh(const TriangleMesh& mesh, const Dsm& grid);
 
+// The heights' noise at the scale of one cell, in the DSM's height units: the robust
+// (1.4826 x MAD) spread of the second differences z[i-1] - 2 z[i] + z[i+1] along rows and
+// columns over the valid cells, divided by sqrt(6) (white noise of sigma s gives second
+// differences of sigma sqrt(6) s; smooth slopes give ~0, so walls and roof edges, a few
+// percent of the differences, move the median little). NaN with fewer than 100 such
+// differences. An s2p DSM of a Pleiades triplet (0.5 m): 0.05 m; a DSM degraded with
+// 0.12 m white noise (synth): 0.15 m.
+double DsmCellNoise(const Dsm& dsm);
+
 }  // namespace satmesh

@@ -1,6 +1,7 @@
 #include "core/refine/coarse_mesh.h"
 
 #include <CGAL/Polygon_mesh_processing/border.h>
+#include <CGAL/Polygon_mesh_processing/detect_features.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <spdlog/spdlog.h>
 
@@ -31,13 +32,23 @@ void DropIsolatedVertices(SurfaceMesh* sm) {
   sm->collect_garbage();
 }
 
-// An edge property map with the mesh's border edges set: what the remeshing keeps.
-SurfaceMesh::Property_map<SurfaceMesh::Edge_index, bool> ConstrainBorder(SurfaceMesh* sm) {
+// An edge property map with the mesh's border edges set, and with crease_angle_deg > 0 its
+// creases (edges whose faces' normals differ by more: CGAL's detect_sharp_edges): what the
+// remeshing keeps.
+SurfaceMesh::Property_map<SurfaceMesh::Edge_index, bool> ConstrainBorder(SurfaceMesh* sm,
+                                                                         double crease_angle_deg) {
   auto is_constrained =
       sm->add_property_map<SurfaceMesh::Edge_index, bool>("e:is_constrained", false).first;
   std::vector<SurfaceMesh::Halfedge_index> border;
   PMP::border_halfedges(faces(*sm), *sm, std::back_inserter(border));
   for (auto h : border) is_constrained[edge(h, *sm)] = true;
+  if (crease_angle_deg > 0) {
+    auto sharp = sm->add_property_map<SurfaceMesh::Edge_index, bool>("e:sharp", false).first;
+    PMP::detect_sharp_edges(*sm, crease_angle_deg, sharp);
+    for (auto e : sm->edges())
+      if (sharp[e]) is_constrained[e] = true;
+    sm->remove_property_map(sharp);
+  }
   return is_constrained;
 }
 
@@ -86,6 +97,8 @@ std::string CoarseMeshOptions::Check() const {
     return "iterations must be in [1, 20], got " + std::to_string(iterations);
   if (faces_per_block < 1000)
     return "faces_per_block must be >= 1000, got " + std::to_string(faces_per_block);
+  if (!(crease_angle_deg >= 0 && crease_angle_deg < 180))
+    return "crease_angle_deg must be in [0, 180), got " + std::to_string(crease_angle_deg);
   return "";
 }
 
@@ -249,7 +262,7 @@ BlockResult RemeshBlock(const TriangleMesh& mesh, const std::vector<int>& face_i
   }
   DropIsolatedVertices(&out.sm);
   if (out.sm.number_of_faces() > 0)
-    RemeshInPlace(options, ConstrainBorder(&out.sm), /*protect=*/true, cancelled, &out.sm);
+    RemeshInPlace(options, ConstrainBorder(&out.sm, options.crease_angle_deg), /*protect=*/true, cancelled, &out.sm);
   out.sm.collect_garbage();
   out.global.assign(out.sm.number_of_vertices(), -1);
   // Interior input vertices were moved: only the (protected) border's are shared.
@@ -266,7 +279,7 @@ SurfaceMesh RemeshWhole(const TriangleMesh& mesh, const CoarseMeshOptions& optio
   if (dropped > 0) spdlog::debug("remesh: dropped {} non-manifold faces", dropped);
   SATMESH_CHECK(sm.number_of_faces() > 0, ErrorCode::kInvalidInput,
                 "remesh: the initial mesh has no usable (manifold) face");
-  RemeshInPlace(options, ConstrainBorder(&sm), /*protect=*/false,
+  RemeshInPlace(options, ConstrainBorder(&sm, options.crease_angle_deg), /*protect=*/false,
                 [&] { return progress.Cancelled(); }, &sm);
   progress.ThrowIfCancelled();
   return sm;
@@ -362,7 +375,7 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
   std::vector<SurfaceMesh::Face_index> band;
   for (auto f : sm.faces())
     if (in_band[uint32_t(f)]) band.push_back(f);
-  const auto is_constrained = ConstrainBorder(&sm);
+  const auto is_constrained = ConstrainBorder(&sm, options.crease_angle_deg);
   spdlog::debug("remesh: {} blocks, band of {} faces", num_blocks, band.size());
   // The band, one iteration at a time (its face range does not survive one): then the
   // faces with a vertex off the blocks' remeshed insides (a vertex CGAL makes is).

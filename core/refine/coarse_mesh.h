@@ -7,6 +7,13 @@
 
 namespace satmesh {
 
+// The crease angle of a DSM start's coarse remesh (RemeshForLevel): a wall's top and
+// bottom lines, where a step of the grid meets a roof or the ground, stay sharp (synthetic
+// 0.5 m stereo / tri-stereo / narrow stereo from a sharp DSM: facades @0.5 m 44.7 / 44.4 /
+// 44.3% -> 46.9 / 46.4 / 46.5%, the DSM's own 46.2%, F 0.4 lower; from the synthetic noisy
+// DSM no change; docs/benchmarks-history.md, session 30).
+constexpr double kDsmCreaseAngleDeg = 60;
+
 struct CoarseMeshOptions {
   double target_edge_m = 2.0;  // target edge length, metres, > 0
   int iterations = 3;          // CGAL isotropic remeshing iterations, [1, 20]
@@ -18,6 +25,10 @@ struct CoarseMeshOptions {
   // band, remeshed by one thread, grows as blocks shrink (2.5 s at 4000, 3.1 s at 1500;
   // docs/benchmarks-history.md, session 27).
   size_t faces_per_block = 4000;
+  // > 0: the input's creases, edges whose two faces' normals differ by more than this
+  // (degrees), are kept where they are, as the border is: a DSM's walls keep their top and
+  // bottom lines (RemeshForLevel: 60 for a DSM start). 0: none.
+  double crease_angle_deg = 0;
   std::string Check() const;
 };
 

@@ -47,7 +47,6 @@ constexpr double kSkipCheckMargin = 0.01;
 // mesh: farther, the coarse mesh is not an approximation of it there (a hole, a cut).
 constexpr double kInitialDetailReachGsd = 4;
 
-
 void CheckInput(const RefineInput& input) {
   SATMESH_CHECK(input.views.size() >= 2, ErrorCode::kInvalidInput,
                 "refine: need at least 2 views, got " + std::to_string(input.views.size()));
@@ -73,11 +72,11 @@ double MedianVertexSigma(std::vector<float> sigma) {
   return *middle;
 }
 
-// `mesh` remeshed isotropically to the triangle edge of `level`. With options.grid_start
-// (resolved: ChooseCoarseStart): a DSM start's own grid with cells of that edge (block
-// means), else `mesh` as it is. (The initial mesh's cells are half the edge estimated from
-// the DSM cell before the GSD is known, CoarseCellSize: 1-pixel cells at the coarse level
-// of a 0.3 m job, whose roofs refine 8-13% worse than from 2-pixel cells, equal to the
+// `mesh` remeshed isotropically to the triangle edge of `level`, a DSM start's creases kept
+// (kDsmCreaseAngleDeg). With options.grid_start (resolved: ChooseCoarseStart): a DSM
+// start's own grid with cells of that edge (block means), else `mesh` as it is. (The
+// initial mesh's cells: InitialMeshCell. From the synthetic noisy DSM, 1-pixel cells at the
+// coarse level of a 0.3 m job refine roofs 8-13% worse than 2-pixel cells, equal to the
 // remesh's: docs/benchmarks-history.md, session 24.)
 TriangleMesh RemeshForLevel(const RefineInput& input, TriangleMesh mesh,
                             const RefineOptions& options, double gsd_m, int level,
@@ -87,7 +86,8 @@ TriangleMesh RemeshForLevel(const RefineInput& input, TriangleMesh mesh,
     return input.initial_for_edge(2 * LevelEdge(options, gsd_m, level));  // cells of one edge
   }
   const double edge_m = GridKeepingTargetEdge(LevelEdge(options, gsd_m, level), grid_cell_m);
-  return RemeshIsotropic(mesh, {.target_edge_m = edge_m}, progress);
+  const double creases = input.initial_is_mesh ? 0 : kDsmCreaseAngleDeg;
+  return RemeshIsotropic(mesh, {.target_edge_m = edge_m, .crease_angle_deg = creases}, progress);
 }
 
 // The initial surface meshed for `level` (before remeshing): what a level below the

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/common/error.h"
+#include "core/dsm/dsm.h"
 #include "core/dsm/fill_holes.h"
 #include "core/geo/crs.h"
 #include "core/image/image_io.h"
@@ -164,6 +165,16 @@ size_t AppendDsmWhereNoMesh(Dsm dsm, PointMesh* mesh) {
 
 TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
   TileInput tile;
+  double noise_m = 0;  // of the data, before the holes are filled smoothly
+  const double mesh_cell_m = InitialMeshCell(spec.refine, dsm, coarse_cell_m, &noise_m);
+  const double cell_m = std::abs(dsm.geo_transform[1]);
+  spdlog::info("initial DSM: height noise at one cell {:.3f} m ({:.2f} cell): {}", noise_m,
+               noise_m / cell_m,
+               mesh_cell_m < coarse_cell_m ? fmt::format("sharp, meshed at its {:.2f} m cells, not "
+                                                         "block-averaged to {:.2f} m", cell_m, coarse_cell_m)
+               : mesh_cell_m > cell_m ? fmt::format("block-averaged to {:.2f} m", mesh_cell_m)
+                                      : std::string("meshed at its cells"));
+  coarse_cell_m = mesh_cell_m;
   tile.initial_heights = dsm;
   tile.filled_dsm_cells = FillDsmHoles(&dsm, spec.fill_holes_m);
   tile.dsm_crs_wkt = dsm.crs_wkt;
@@ -173,7 +184,6 @@ TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
   SATMESH_CHECK(!valid.empty(), ErrorCode::kInvalidInput,
                 "initial DSM '" + spec.initial_dsm + "' has no valid cell");
   const auto [zmin_it, zmax_it] = std::minmax_element(valid.begin(), valid.end());
-  const double cell_m = std::abs(dsm.geo_transform[1]);
   FrameAndViews(spec, dsm.crs_wkt, BoxOfDsm(dsm), *zmin_it, *zmax_it, Median(valid), cell_m, &tile);
   tile.refine.initial_cell_m = cell_m;
 
@@ -245,6 +255,15 @@ TileInput PrepareMeshTileInput(const JobSpec& spec, const JobPlan& plan, const P
 }
 
 }  // namespace
+
+double InitialMeshCell(const RefineOptions& options, const Dsm& dsm, double coarse_cell_m,
+                       double* noise_m) {
+  const double cell_m = std::abs(dsm.geo_transform[1]);
+  const double noise = options.sharp_dsm_noise_cells > 0 ? DsmCellNoise(dsm) : NAN;
+  if (noise_m) *noise_m = noise;
+  return noise <= options.sharp_dsm_noise_cells * cell_m ? std::min(cell_m, coarse_cell_m)
+                                                         : coarse_cell_m;
+}
 
 double CoarseCellSize(const RefineOptions& options, double dsm_cell_m) {
   return 0.5 * options.coarse_edge_px * dsm_cell_m *

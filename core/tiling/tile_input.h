@@ -46,6 +46,17 @@ Dsm DownsampleDsm(const Dsm& dsm, int factor);
 // remeshes it to its coarse level anyway).
 double CoarseCellSize(const RefineOptions& options, double dsm_cell_m);
 
+// The cell the initial mesh of `dsm` is made at: its own where its heights' noise at one
+// cell (DsmCellNoise) is at most options.sharp_dsm_noise_cells cells (a DSM as sharp as
+// s2p's of the Pleiades triplet, 0.10 cell: block averages would round its walls off; the
+// remesh keeps them), else coarse_cell_m (CoarseCellSize: averages halve the noise of a
+// noisy one). Synthetic 0.5 m scenes whose DSM's noise is smoothed to 0.06 cell, stereo /
+// tri-stereo / narrow stereo: facades @0.5 m 34.8 / 36.2 / 35.2% averaged, 46-47% at full
+// resolution (the DSM's own: 46.2%); at 0.19 cell a tie; the synthetic DSM's 0.31 cell
+// favour the average (docs/benchmarks-history.md, session 30). `noise_m`: the noise.
+double InitialMeshCell(const RefineOptions& options, const Dsm& dsm, double coarse_cell_m,
+                       double* noise_m = nullptr);
+
 // Builds the refinement input over all of `initial_dsm` (its centre is the frame's), after
 // filling its holes up to spec.fill_holes_m from data (FillDsmHoles).
 TileInput PrepareTileInput(const JobSpec& spec, Dsm initial_dsm, double coarse_cell_m);

@@ -243,6 +243,58 @@ TEST(DsmRoundTrip, PleiadesMarseilleS2pDsm) {
   EXPECT_GT(s.compared, s.valid / 2);
 }
 
+// A city-like grid: a sloped street, 10 m high blocks of 15 x 12 m on a 30 x 24 m period
+// (walls: ~7% of the cells' second differences), white noise of `sigma`, some NaN.
+Dsm NoisyCity(double sigma, uint64_t seed) {
+  std::mt19937_64 gen(seed);
+  std::normal_distribution<float> noise(0, float(sigma));
+  return CreateDsm(300, 200, [&](int i, int j) {
+    if ((i * 7 + j * 3) % 97 == 0) return kNaN;
+    const float base = 0.02f * i + 0.01f * j;
+    const bool block = (i / 30) % 2 == 1 && (j / 24) % 2 == 0;
+    return base + (block ? 10.0f : 0.0f) + noise(gen);
+  });
+}
+
+TEST(DsmCellNoise, RecoversWhiteNoiseBesideWallsAndSlopes) {
+  for (double sigma : {0.02, 0.05, 0.15, 0.3}) {
+    const double estimate = DsmCellNoise(NoisyCity(sigma, 7));
+    // The walls' differences lie far outside the noise's: they widen the MAD by about their
+    // share of the differences, and no more however high the walls.
+    EXPECT_NEAR(estimate, 1.05 * sigma, 0.05 * sigma) << "sigma " << sigma;
+  }
+  // A noiseless sloped city: its smooth parts have zero second differences.
+  EXPECT_LT(DsmCellNoise(NoisyCity(0, 7)), 1e-4);
+}
+
+TEST(DsmCellNoise, SmoothedNoiseReadsLower) {
+  // The same noise averaged over 2 x 2 cells halves its sigma and correlates neighbours,
+  // which lowers the second differences further: the estimate measures what a mesh
+  // through the cells would hold at one cell's scale.
+  const Dsm dsm = NoisyCity(0.2, 3);
+  Dsm smoothed = dsm;
+  for (int j = 0; j + 1 < dsm.height; ++j)
+    for (int i = 0; i + 1 < dsm.width; ++i)
+      smoothed.at(i, j) = 0.25f * (dsm.at(i, j) + dsm.at(i + 1, j) + dsm.at(i, j + 1) +
+                                   dsm.at(i + 1, j + 1));
+  EXPECT_LT(DsmCellNoise(smoothed), 0.5 * DsmCellNoise(dsm));
+}
+
+TEST(DsmCellNoise, TooFewCellsIsNaN) {
+  EXPECT_TRUE(std::isnan(DsmCellNoise(CreateDsm(5, 5, [](int, int) { return 1.0f; }))));
+  EXPECT_TRUE(std::isnan(DsmCellNoise(CreateDsm(40, 40, [](int, int) { return kNaN; }))));
+}
+
+TEST(DsmCellNoise, PleiadesMarseilleS2pDsmIsSharp) {
+  const std::string path =
+      std::string(SATMESH_SHARED_DATA_DIR) + "/pleiades_marseille_triplet/s2p_dsm.tif";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing " << path;
+  const double noise = DsmCellNoise(ReadDsm(path));
+  std::printf("s2p_dsm.tif: cell noise %.4f m\n", noise);
+  // The triplet's s2p DSM holds its 0.5 m cells to ~0.05 m (python/numpy: 0.051 m).
+  EXPECT_NEAR(noise, 0.051, 0.005);
+}
+
 TEST(DsmIo, WriteReadRoundTrip) {
   EnsureGdalInitialized();
   Dsm dsm = CreateDsm(7, 5, [](int i, int j) { return (i + j) % 3 ? 50.f + i : kNaN; });

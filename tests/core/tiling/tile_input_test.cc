@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "core/geo/crs.h"
 
@@ -27,6 +28,7 @@ TEST(TileInput, InitialSurfaceForAnEdgeIsTheDsmAtHalfThatEdge) {
   const Dsm dsm = TestDsm();
   JobSpec spec;  // no image: only the surface is prepared
   spec.initial_dsm = "test.tif";
+  spec.refine.sharp_dsm_noise_cells = 0;  // block-averaged however sharp (see below)
   const TileInput coarse = PrepareTileInput(spec, dsm, /*coarse_cell_m=*/2.0);
   const TileInput fine = PrepareTileInput(spec, dsm, /*coarse_cell_m=*/0.5);
   ASSERT_TRUE(coarse.refine.initial_for_edge);
@@ -48,6 +50,32 @@ TEST(TileInput, InitialSurfaceForAnEdgeIsTheDsmAtHalfThatEdge) {
 
 // The DSM's holes are filled before anything is meshed from it; with fill_holes_m = 0
 // they stay open.
+// A DSM's cells are meshed as they are where its noise at one cell is at most
+// sharp_dsm_noise_cells cells, else block-averaged to the coarse cell.
+TEST(TileInput, ASharpDsmIsMeshedAtItsCellsANoisyOneFromBlockAverages) {
+  JobSpec spec;
+  spec.initial_dsm = "test.tif";
+  const Dsm smooth = TestDsm();
+  Dsm noisy = smooth;
+  std::mt19937 gen(5);
+  std::normal_distribution<float> noise(0, 0.15f);  // 0.3 cell
+  for (float& z : noisy.z) z += noise(gen);
+  double noise_m = 0;
+  EXPECT_DOUBLE_EQ(InitialMeshCell(spec.refine, smooth, 2.0, &noise_m), 0.5);
+  EXPECT_LT(noise_m, 0.01);
+  EXPECT_DOUBLE_EQ(InitialMeshCell(spec.refine, noisy, 2.0, &noise_m), 2.0);
+  EXPECT_NEAR(noise_m, 0.15, 0.015);
+  EXPECT_DOUBLE_EQ(InitialMeshCell(spec.refine, smooth, 0.5), 0.5);  // never coarser
+  spec.refine.sharp_dsm_noise_cells = 0.35;                          // the bound, in cells
+  EXPECT_DOUBLE_EQ(InitialMeshCell(spec.refine, noisy, 2.0), 0.5);
+  spec.refine.sharp_dsm_noise_cells = 0;  // off: always averaged
+  EXPECT_DOUBLE_EQ(InitialMeshCell(spec.refine, smooth, 2.0), 2.0);
+  // PrepareTileInput meshes by it.
+  spec.refine.sharp_dsm_noise_cells = 0.2;
+  EXPECT_EQ(PrepareTileInput(spec, smooth, 2.0).refine.initial_mesh.vertices.size(), 100u * 80u);
+  EXPECT_EQ(PrepareTileInput(spec, noisy, 2.0).refine.initial_mesh.vertices.size(), 25u * 20u);
+}
+
 TEST(TileInput, FillsTheDsmHolesBeforeMeshing) {
   Dsm dsm = TestDsm();
   for (int j = 30; j < 34; ++j)
