@@ -19,7 +19,8 @@ int RunSynth(const std::vector<std::string>& argv) {
         "usage: satmesh synth --out DIR [--preset small|default|large] [--seed N]\n"
         "                     [--views stereo|tristereo|multidate|jax] [--num-views N]\n"
         "                     [--gsd M] [--size-m M] [--rpc-bias-px SIGMA] [--no-trees]\n"
-        "                     [--convergence-deg MIN,MAX] [--no-preview]\n"
+        "                     [--convergence-deg MIN,MAX] [--initial-dsm noisy|sharp]\n"
+        "                     [--no-preview]\n"
         "Writes images/*.tif (UInt16, RPC, IMD acquisition metadata), truth/, initial/dsm.tif,\n"
         "scene.json, job.json, preview.png.\n"
         "  --preset P       scene size: small (72 m, for tests), default (300 m), large (750 m)\n"
@@ -38,7 +39,11 @@ int RunSynth(const std::vector<std::string>& argv) {
         "  --rpc-bias-px S  per-image RPC bias sigma, px (default: 1 for multidate/jax, 0 for one pass)\n"
         "  --convergence-deg MIN,MAX  one pass: the range the convergence is drawn from (stereo:\n"
         "                   the pair's, default 15,35; tristereo: each outer view's with the middle\n"
-        "                   one, default 6,15); e.g. 7,12 a Pleiades narrow pair, 30,45 WorldView\n");
+        "                   one, default 6,15); e.g. 7,12 a Pleiades narrow pair, 30,45 WorldView\n"
+        "  --initial-dsm D  the initial DSM's errors: noisy (default: edge fattening, blur,\n"
+        "                   correlated and per-cell noise, blobs, holes; ~0.3 cell of noise at\n"
+        "                   one cell at 0.5 m) or sharp (no blur, per-cell noise 0.05 m: as the\n"
+        "                   Pleiades triplet's s2p DSM, 0.05 m at 0.5 m cells)\n");
     return kExitOk;
   }
   const std::string out = args.Require("out");
@@ -86,6 +91,12 @@ int RunSynth(const std::vector<std::string>& argv) {
   options.gsd_m = args.GetDouble("gsd", options.gsd_m);
   options.city.aoi_size_m = args.GetDouble("size-m", options.city.aoi_size_m);
   options.rpc_bias_sigma_px = args.GetDouble("rpc-bias-px", options.rpc_bias_sigma_px);
+  if (args.Has("initial-dsm")) {
+    const std::string dsm = args.Require("initial-dsm");
+    SATMESH_CHECK(dsm == "noisy" || dsm == "sharp", ErrorCode::kInvalidArgument,
+                  "option --initial-dsm: expected noisy or sharp, got '" + dsm + "'");
+    if (dsm == "sharp") options.initial.white_noise_m = 0.05, options.initial.blur_sigma_m = 0;
+  }
   if (args.Has("no-trees")) options.city.trees = false;
   if (args.Has("no-preview")) options.write_preview = false;
   const std::string why = options.Check();

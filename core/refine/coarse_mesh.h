@@ -8,10 +8,12 @@
 namespace satmesh {
 
 // The crease angle of a DSM start's coarse remesh (RemeshForLevel): a wall's top and
-// bottom lines, where a step of the grid meets a roof or the ground, stay sharp (synthetic
-// 0.5 m stereo / tri-stereo / narrow stereo from a sharp DSM: facades @0.5 m 44.7 / 44.4 /
-// 44.3% -> 46.9 / 46.4 / 46.5%, the DSM's own 46.2%, F 0.4 lower; from the synthetic noisy
-// DSM no change; docs/benchmarks-history.md, session 30).
+// bottom lines, where a step of the grid meets a roof or the ground, stay sharp. From a
+// DSM meshed at its full resolution whose walls are in place (synthetic 0.5 m stereo /
+// tri-stereo / narrow stereo, sharp_dsm_noise_cells 0.2): facades @0.5 m 44.7 / 44.4 /
+// 44.3% -> 46.9 / 46.4 / 46.5%, the DSM's own 46.2%, F 0.4 lower; from block averages (the
+// default at 0.5 m) no change beyond 0.002 m and 0.2 points (docs/benchmarks-history.md,
+// session 30).
 constexpr double kDsmCreaseAngleDeg = 60;
 
 struct CoarseMeshOptions {

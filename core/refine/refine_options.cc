@@ -66,10 +66,10 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"coarse_edge_px", &R::coarse_edge_px, Range::Above(0),
        "edge length of the coarse mesh at the coarsest level, in level pixels"},
       {"sharp_dsm_noise_cells", &R::sharp_dsm_noise_cells, Range::AtLeast(0),
-       "a DSM start whose heights' noise at one cell (robust spread of its second "
+       "> 0: a DSM start whose heights' noise at one cell (robust spread of its second "
        "differences) is at most this many cells is meshed at full resolution for the coarse "
-       "remesh, its walls one cell wide; a noisier one is block-averaged to half the coarse "
-       "triangle edge first; 0: always averaged"},
+       "remesh, its walls one cell wide (a DSM whose walls are in place: LiDAR, a city model); "
+       "0: block-averaged to half the coarse triangle edge first"},
       {"flat_tolerance_gsd", &R::flat_tolerance_gsd, Range::AtLeast(0),
        "between levels only faces near a vertex off the plane of its neighbours by more than "
        "this many level GSDs are subdivided; planar parts keep larger triangles; 0: all faces"},

@@ -58,12 +58,14 @@ struct RefineOptions {
                                    // first and last; in between each pixel keeps its face
                                    // and its point follows the face (FollowHitMaps)
   double coarse_edge_px = 2.0;     // edge length of the coarse mesh at level L, in level px
-  double sharp_dsm_noise_cells = 0.2;  // a DSM start whose heights' noise at one cell
+  double sharp_dsm_noise_cells = 0;  // > 0: a DSM start whose heights' noise at one cell
                                    // (DsmCellNoise) is at most this many cells is meshed at
                                    // its full resolution for the coarse remesh, its walls
-                                   // one cell wide; a noisier one is block-averaged to half
-                                   // the coarse triangle edge first (tile_input.h,
-                                   // InitialMeshCell); 0: always averaged
+                                   // one cell wide, not block-averaged to half the coarse
+                                   // triangle edge first (tile_input.h, InitialMeshCell).
+                                   // Off by default: it pays where the DSM's walls stand
+                                   // where the buildings' do (LiDAR, a city model) and costs
+                                   // where a stereo pipeline fattened them
   double flat_tolerance_gsd = 1.0;  // between levels only faces near a vertex off the plane
                                    // of its neighbours by more than this (GSD of the level
                                    // just finished) are subdivided; planar parts keep the

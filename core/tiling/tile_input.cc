@@ -259,10 +259,11 @@ TileInput PrepareMeshTileInput(const JobSpec& spec, const JobPlan& plan, const P
 double InitialMeshCell(const RefineOptions& options, const Dsm& dsm, double coarse_cell_m,
                        double* noise_m) {
   const double cell_m = std::abs(dsm.geo_transform[1]);
-  const double noise = options.sharp_dsm_noise_cells > 0 ? DsmCellNoise(dsm) : NAN;
+  const double noise = DsmCellNoise(dsm);
   if (noise_m) *noise_m = noise;
-  return noise <= options.sharp_dsm_noise_cells * cell_m ? std::min(cell_m, coarse_cell_m)
-                                                         : coarse_cell_m;
+  return options.sharp_dsm_noise_cells > 0 && noise <= options.sharp_dsm_noise_cells * cell_m
+             ? std::min(cell_m, coarse_cell_m)
+             : coarse_cell_m;
 }
 
 double CoarseCellSize(const RefineOptions& options, double dsm_cell_m) {

@@ -47,13 +47,17 @@ Dsm DownsampleDsm(const Dsm& dsm, int factor);
 double CoarseCellSize(const RefineOptions& options, double dsm_cell_m);
 
 // The cell the initial mesh of `dsm` is made at: its own where its heights' noise at one
-// cell (DsmCellNoise) is at most options.sharp_dsm_noise_cells cells (a DSM as sharp as
-// s2p's of the Pleiades triplet, 0.10 cell: block averages would round its walls off; the
-// remesh keeps them), else coarse_cell_m (CoarseCellSize: averages halve the noise of a
-// noisy one). Synthetic 0.5 m scenes whose DSM's noise is smoothed to 0.06 cell, stereo /
-// tri-stereo / narrow stereo: facades @0.5 m 34.8 / 36.2 / 35.2% averaged, 46-47% at full
-// resolution (the DSM's own: 46.2%); at 0.19 cell a tie; the synthetic DSM's 0.31 cell
-// favour the average (docs/benchmarks-history.md, session 30). `noise_m`: the noise.
+// cell (DsmCellNoise) is at most options.sharp_dsm_noise_cells (> 0) cells, else
+// coarse_cell_m (CoarseCellSize; its block averages halve a noisy DSM's noise and round a
+// sharp one's walls off). Synthetic 0.5 m stereo / tri-stereo / narrow stereo from a DSM
+// whose walls are in place (noise 0.06 cell): facades @0.5 m 34.8 / 36.2 / 35.2% averaged,
+// 46.9 / 46.4 / 46.5% at full resolution (the DSM's own 46.2%), roofs equal. From a sharp
+// DSM whose walls a stereo pipeline fattened by 0.9 m (`synth --initial-dsm sharp`, 0.12
+// cell): 16.8 / 19.9 / 18.8% averaged, 6.0 / 7.8 / 7.1% at full resolution, F 5 points
+// lower: the images move a blurred wall, not a sharp one. The Pléiades s2p DSM (0.10
+// cell): held-out narrow pairs -0.0040 / -0.0035 averaged, -0.0038 / -0.0035 at full
+// resolution (docs/benchmarks-history.md, session 30). `noise_m`: the noise (always
+// measured, for the log).
 double InitialMeshCell(const RefineOptions& options, const Dsm& dsm, double coarse_cell_m,
                        double* noise_m = nullptr);
 

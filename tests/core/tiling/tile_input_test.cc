@@ -28,7 +28,6 @@ TEST(TileInput, InitialSurfaceForAnEdgeIsTheDsmAtHalfThatEdge) {
   const Dsm dsm = TestDsm();
   JobSpec spec;  // no image: only the surface is prepared
   spec.initial_dsm = "test.tif";
-  spec.refine.sharp_dsm_noise_cells = 0;  // block-averaged however sharp (see below)
   const TileInput coarse = PrepareTileInput(spec, dsm, /*coarse_cell_m=*/2.0);
   const TileInput fine = PrepareTileInput(spec, dsm, /*coarse_cell_m=*/0.5);
   ASSERT_TRUE(coarse.refine.initial_for_edge);
@@ -50,11 +49,14 @@ TEST(TileInput, InitialSurfaceForAnEdgeIsTheDsmAtHalfThatEdge) {
 
 // The DSM's holes are filled before anything is meshed from it; with fill_holes_m = 0
 // they stay open.
-// A DSM's cells are meshed as they are where its noise at one cell is at most
-// sharp_dsm_noise_cells cells, else block-averaged to the coarse cell.
+// With sharp_dsm_noise_cells > 0 a DSM's cells are meshed as they are where its noise at
+// one cell is at most that many cells, else block-averaged to the coarse cell; by default
+// always averaged.
 TEST(TileInput, ASharpDsmIsMeshedAtItsCellsANoisyOneFromBlockAverages) {
   JobSpec spec;
   spec.initial_dsm = "test.tif";
+  EXPECT_DOUBLE_EQ(InitialMeshCell(spec.refine, TestDsm(), 2.0), 2.0);  // off by default
+  spec.refine.sharp_dsm_noise_cells = 0.2;
   const Dsm smooth = TestDsm();
   Dsm noisy = smooth;
   std::mt19937 gen(5);
