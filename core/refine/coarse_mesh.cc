@@ -35,7 +35,7 @@ void DropIsolatedVertices(SurfaceMesh* sm) {
 // An edge property map with the mesh's border edges set, and with crease_angle_deg > 0 its
 // creases (edges whose faces' normals differ by more: CGAL's detect_sharp_edges): what the
 // remeshing keeps.
-SurfaceMesh::Property_map<SurfaceMesh::Edge_index, bool> ConstrainBorder(SurfaceMesh* sm,
+SurfaceMesh::Property_map<SurfaceMesh::Edge_index, bool> ConstrainedEdges(SurfaceMesh* sm,
                                                                          double crease_angle_deg) {
   auto is_constrained =
       sm->add_property_map<SurfaceMesh::Edge_index, bool>("e:is_constrained", false).first;
@@ -262,7 +262,8 @@ BlockResult RemeshBlock(const TriangleMesh& mesh, const std::vector<int>& face_i
   }
   DropIsolatedVertices(&out.sm);
   if (out.sm.number_of_faces() > 0)
-    RemeshInPlace(options, ConstrainBorder(&out.sm, options.crease_angle_deg), /*protect=*/true, cancelled, &out.sm);
+    RemeshInPlace(options, ConstrainedEdges(&out.sm, options.crease_angle_deg), /*protect=*/true,
+                  cancelled, &out.sm);
   out.sm.collect_garbage();
   out.global.assign(out.sm.number_of_vertices(), -1);
   // Interior input vertices were moved: only the (protected) border's are shared.
@@ -279,7 +280,7 @@ SurfaceMesh RemeshWhole(const TriangleMesh& mesh, const CoarseMeshOptions& optio
   if (dropped > 0) spdlog::debug("remesh: dropped {} non-manifold faces", dropped);
   SATMESH_CHECK(sm.number_of_faces() > 0, ErrorCode::kInvalidInput,
                 "remesh: the initial mesh has no usable (manifold) face");
-  RemeshInPlace(options, ConstrainBorder(&sm, options.crease_angle_deg), /*protect=*/false,
+  RemeshInPlace(options, ConstrainedEdges(&sm, options.crease_angle_deg), /*protect=*/false,
                 [&] { return progress.Cancelled(); }, &sm);
   progress.ThrowIfCancelled();
   return sm;
@@ -375,7 +376,7 @@ SurfaceMesh RemeshInBlocks(TriangleMesh mesh, std::vector<int> block, int num_bl
   std::vector<SurfaceMesh::Face_index> band;
   for (auto f : sm.faces())
     if (in_band[uint32_t(f)]) band.push_back(f);
-  const auto is_constrained = ConstrainBorder(&sm, options.crease_angle_deg);
+  const auto is_constrained = ConstrainedEdges(&sm, options.crease_angle_deg);
   spdlog::debug("remesh: {} blocks, band of {} faces", num_blocks, band.size());
   // The band, one iteration at a time (its face range does not survive one): then the
   // faces with a vertex off the blocks' remeshed insides (a vertex CGAL makes is).

@@ -168,12 +168,14 @@ TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
   double noise_m = 0;  // of the data, before the holes are filled smoothly
   const double mesh_cell_m = InitialMeshCell(spec.refine, dsm, coarse_cell_m, &noise_m);
   const double cell_m = std::abs(dsm.geo_transform[1]);
+  std::string meshed = "meshed at its cells";
+  if (mesh_cell_m < coarse_cell_m)
+    meshed = fmt::format("sharp, meshed at its {:.2f} m cells, not block-averaged to {:.2f} m",
+                         cell_m, coarse_cell_m);
+  else if (mesh_cell_m > cell_m)
+    meshed = fmt::format("block-averaged to {:.2f} m", mesh_cell_m);
   spdlog::info("initial DSM: height noise at one cell {:.3f} m ({:.2f} cell): {}", noise_m,
-               noise_m / cell_m,
-               mesh_cell_m < coarse_cell_m ? fmt::format("sharp, meshed at its {:.2f} m cells, not "
-                                                         "block-averaged to {:.2f} m", cell_m, coarse_cell_m)
-               : mesh_cell_m > cell_m ? fmt::format("block-averaged to {:.2f} m", mesh_cell_m)
-                                      : std::string("meshed at its cells"));
+               noise_m / cell_m, meshed);
   coarse_cell_m = mesh_cell_m;
   tile.initial_heights = dsm;
   tile.filled_dsm_cells = FillDsmHoles(&dsm, spec.fill_holes_m);
