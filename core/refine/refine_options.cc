@@ -43,6 +43,10 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"step", &R::step, Range::Above(0), "gradient step, in units of (level GSD)^2"},
       {"max_step_gsd", &R::max_step_gsd, Range::Above(0),
        "clamp of one vertex's move per iteration, in level GSD"},
+      {"momentum", &R::momentum, Range::FromBelow(0, 1),
+       "each vertex's move adds this times its previous move (heavy ball): a move the "
+       "iterations agree on grows to 1 / (1 - this) steps, the swing between a pair's two "
+       "directions and its groups is damped; 0: plain gradient steps"},
       {"zncc_window_radius", &R::zncc_window_radius, Range::In(1, 7),
        "ZNCC window radius r: (2r+1)^2 pixels"},
       {"min_window_valid", &R::min_window_valid, Range::AboveTo(0, 1),

@@ -41,6 +41,8 @@ struct RefineOptions {
   double beta = 0.1;               // weight of the thin-plate term (homogenised by 1/GSD²)
   double step = 0.5;               // gradient step, in units of (level GSD)²
   double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD
+  double momentum = 0;             // each vertex's move adds this x its previous move (heavy
+                                   // ball, MomentumStep; docs/benchmarks-history.md, session 31)
   int zncc_window_radius = 2;      // ZNCC window (2r+1)²
   double min_window_valid = 0.5;   // min fraction of valid pixels in a ZNCC window
   double variance_floor = 1e-4;    // floor of the windows' variances (unit-range images)

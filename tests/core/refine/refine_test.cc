@@ -123,6 +123,35 @@ TEST(Refine, PairsTakenInTurnConvergeAsEveryPairDoes) {
   }
 }
 
+// momentum (MomentumStep): a move every iteration agrees on is made in fewer iterations than
+// by plain steps, where the steps are below the clamp (a plane started 2 GSD off, one level,
+// no pull towards the start, a small step: the regime of weakly textured or weakly
+// constrained surfaces), and the level's last plain steps still settle it.
+TEST(Refine, MomentumMakesAConsistentMoveInFewerIterations) {
+  const testing::Plane plane;
+  const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
+                                             testing::PlaneMesh(plane, 40, 1.0, 1.0));
+  RefineOptions plain = SmallOptions();
+  plain.levels = 0;
+  plain.initial_sigma_gsd = 0;
+  plain.step = 0.1;
+  plain.momentum = 0;
+  RefineOptions heavy = plain;
+  heavy.momentum = 0.5;
+  for (const int iterations : {10, 16}) {
+    plain.iterations_per_level = heavy.iterations_per_level = iterations;
+    const double a = PlaneError(Refine(input, plain).mesh, plane, 30).first;
+    const double b = PlaneError(Refine(input, heavy).mesh, plane, 30).first;
+    std::printf("%d iterations from 1 m: plain %.4f m, momentum 0.5 %.4f m\n", iterations, a, b);
+    if (iterations == 10) {
+      EXPECT_LT(b, 0.75 * a);  // 4 heavy-ball steps, then 6 plain ones
+    }
+    if (iterations == 16) {
+      EXPECT_LT(b, 0.1);  // 0.2 GSD, as the tests above
+    }
+  }
+}
+
 // The default rasterized hit maps and Embree's ray casting give the same refinement.
 TEST(Refine, RasterizedAndRayCastHitMapsAgree) {
   const testing::Plane plane;
