@@ -344,7 +344,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   const int passes = std::max(1, iterations);
   const int gathering = level == 0 ? (opt.alternate_directions && passes >= 3 ? 2 : 1) : 0;
   const int information_from = passes - gathering;
-  // MomentumStep: each vertex's previous move (the level's first step has none).
+  // MomentumStep: each vertex's previous move (the level's first step has none; kept while
+  // the heavy ball runs).
   std::vector<Eigen::Vector3f> previous_move(opt.momentum > 0 ? nv : 0, Eigen::Vector3f::Zero());
 
   for (int it = 0; it < passes; ++it) {
@@ -456,7 +457,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       if (momentum > 0) move = MomentumStep(move, previous_move[v], momentum);
       const double len = move.norm();
       if (len > max_move) move *= max_move / len;
-      if (opt.momentum > 0) previous_move[v] = move.cast<float>();
+      if (momentum > 0) previous_move[v] = move.cast<float>();  // not read in the plain tail
       mesh->vertices[v] += move.cast<float>();
     }
     if (scene) scene->UpdateVertices(mesh->vertices);
