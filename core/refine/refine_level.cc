@@ -36,19 +36,17 @@ namespace {
 // in 3D below the coarsest level cost 0.3-0.5 points of facades).
 constexpr double kInitialPullPerIteration = 0.1;
 
-// The heavy-ball step (RefineOptions::momentum): the gradient step plus momentum x the
-// vertex's previous move (as clamped). A move the iterations agree on grows to
-// 1 / (1 - momentum) gradient steps; one that alternates in sign (a pair's two directions,
-// taken in turn; the pair groups) is damped to 1 / (1 + momentum). A level's last
-// kEveryPairAtTheEnd iterations take plain steps, so the surface settles where every pair
-// agrees. Off by default: at 0.5 with 15 iterations it matched 25 plain ones on the 300 m
-// sets in 0.6-0.8x the time, but the large jax job's roofs were 4% worse; with 20, jax as
-// plain but the multi-date 0.3 m set's roofs 10% worse (with 21, and plain with 20: not), so
-// the result depends on the count's parity, i.e. on which direction of the pairs the plain
-// tail starts with (docs/benchmarks-history.md, session 31).
+// The heavy-ball step (RefineOptions::momentum): the gradient step plus momentum x the move
+// the vertex's last two (clamped) moves agree on (AgreedMove). A move the iterations agree
+// on grows to 1 / (1 - momentum) gradient steps; the swing between a pair's two directions,
+// taken in turn, and between the pair groups is not carried at all. Carrying the last move
+// itself (the classic heavy ball) damps that swing only to 1 / (1 + momentum), and where
+// the level ends in it depended on the parity of the iteration count: the multi-date 0.3 m
+// set's roofs 10% worse with 20 iterations than with 21 or 25, even after 6 plain steps
+// (docs/benchmarks-history.md, sessions 31 and 32).
 Eigen::Vector3d MomentumStep(const Eigen::Vector3d& gradient_step,
-                             const Eigen::Vector3f& previous_move, double momentum) {
-  return gradient_step + momentum * previous_move.cast<double>();
+                             const Eigen::Vector3f& agreed_move, double momentum) {
+  return gradient_step + momentum * agreed_move.cast<double>();
 }
 
 // pairs_per_iteration: the iterations before a level's last that take every pair again.
@@ -178,6 +176,14 @@ double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& so
 }
 
 }  // namespace
+
+Eigen::Vector3f AgreedMove(const Eigen::Vector3f& last, const Eigen::Vector3f& before) {
+  Eigen::Vector3f agreed;
+  for (int c = 0; c < 3; ++c)
+    agreed[c] = last[c] * before[c] <= 0 ? 0.f
+                : std::abs(last[c]) < std::abs(before[c]) ? last[c] : before[c];
+  return agreed;
+}
 
 double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sources,
                  const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
@@ -334,19 +340,27 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   std::vector<PairEnergy> first_energies;  // the first iteration's, per pair-direction
   std::vector<HitMapUpdate> update(views.size());
   std::vector<int> made_at(views.size(), 0);
+  // A level's last iteration takes both directions of every pair where the pairs are one
+  // group: with one direction last, where the level ends depends on which one (the count's
+  // parity: stereo 0.3 m roofs 0.229-0.235 m after an even count, 0.222-0.223 after an odd
+  // one; docs/benchmarks-history.md, session 32). With more groups the last iterations'
+  // directions alternate across the pairs, half of them ending on each, and both would cost
+  // 8% of the large jax job's level 0 for the same result.
+  const bool both_last = groups == 1;
   // No pass after the last step only to measure (it cost 12% of level 0's photometric
   // work on the large job, and a rasterization of every view): at level 0 the last
   // iterations, which take every pair, gather the Fisher information of the surface for
-  // its height sigma, both directions of each pair (two iterations where they alternate;
-  // a level of 1 or 2 iterations: its last, with both). iterations 0: one pass that
-  // measures and moves nothing.
+  // its height sigma, both directions of each pair (the last iteration where it takes
+  // both, else the last two, which alternate). iterations 0: one pass that measures and
+  // moves nothing.
   const bool measure_only = iterations == 0;
   const int passes = std::max(1, iterations);
-  const int gathering = level == 0 ? (opt.alternate_directions && passes >= 3 ? 2 : 1) : 0;
+  const int gathering =
+      level == 0 ? (opt.alternate_directions && passes >= 3 && !both_last ? 2 : 1) : 0;
   const int information_from = passes - gathering;
-  // MomentumStep: each vertex's previous move (the level's first step has none; kept while
-  // the heavy ball runs).
-  std::vector<Eigen::Vector3f> previous_move(opt.momentum > 0 ? nv : 0, Eigen::Vector3f::Zero());
+  // MomentumStep: each vertex's last two moves (the level's first two steps carry nothing).
+  std::vector<Eigen::Vector3f> last_move(opt.momentum > 0 ? nv : 0, Eigen::Vector3f::Zero());
+  std::vector<Eigen::Vector3f> move_before(last_move.size(), Eigen::Vector3f::Zero());
 
   for (int it = 0; it < passes; ++it) {
     ctx.progress.ThrowIfCancelled();
@@ -387,8 +401,9 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     std::fill(seen.begin(), seen.end(), 0);
     if (it == information_from && it > 0) std::fill(information.begin(), information.end(), 0.0);
     // Iterations after the first take one direction per pair, alternating (from one turn
-    // through the groups to the next where the pairs are grouped).
-    const bool half = opt.alternate_directions && it > 0 && !(gathering == 1 && final_information);
+    // through the groups to the next where the pairs are grouped), but the last (both_last).
+    const bool half = opt.alternate_directions && it > 0 && !(gathering == 1 && final_information) &&
+                      !(both_last && last);
     const int turn = grouped ? (it - 1) / groups : it;
     const double zncc = PhotometricPass(views, slot, group_pairs, *mesh, normals, photo, &scratch,
                                         measure_only ? nullptr : &gradient,
@@ -436,7 +451,6 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const double smooth_scale = opt.step * opt.beta;
     const double max_move = opt.max_step_gsd * gsd;
     const double directions_per_pair = (half ? 1.0 : 2.0) / (grouped ? groups : 1);
-    const double momentum = it < iterations - kEveryPairAtTheEnd ? opt.momentum : 0.0;
     const float* confidence_of = confidence.data();
 #pragma omp parallel for schedule(static)
     for (long v = 0; v < long(nv); ++v) {
@@ -454,10 +468,11 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
         move -= kInitialPullPerIteration * double(prior_weight[v]) * off;
       }
       if (opt.hold_boundary_xy && adjacency.is_boundary[v]) move.x() = move.y() = 0;
-      if (momentum > 0) move = MomentumStep(move, previous_move[v], momentum);
+      if (opt.momentum > 0)
+        move = MomentumStep(move, AgreedMove(last_move[v], move_before[v]), opt.momentum);
       const double len = move.norm();
       if (len > max_move) move *= max_move / len;
-      if (momentum > 0) previous_move[v] = move.cast<float>();  // not read in the plain tail
+      if (opt.momentum > 0) move_before[v] = last_move[v], last_move[v] = move.cast<float>();
       mesh->vertices[v] += move.cast<float>();
     }
     if (scene) scene->UpdateVertices(mesh->vertices);

@@ -44,9 +44,9 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"max_step_gsd", &R::max_step_gsd, Range::Above(0),
        "clamp of one vertex's move per iteration, in level GSD"},
       {"momentum", &R::momentum, Range::FromBelow(0, 1),
-       "each vertex's move adds this times its previous move (heavy ball): a move the "
-       "iterations agree on grows to 1 / (1 - this) steps, the swing between a pair's two "
-       "directions and its groups is damped; 0: plain gradient steps"},
+       "each vertex's move adds this times what its last two moves agree on (heavy ball): a "
+       "move the iterations agree on grows to 1 / (1 - this) steps, the swing between a "
+       "pair's two directions and its groups is not carried; 0: plain gradient steps"},
       {"zncc_window_radius", &R::zncc_window_radius, Range::In(1, 7),
        "ZNCC window radius r: (2r+1)^2 pixels"},
       {"min_window_valid", &R::min_window_valid, Range::AboveTo(0, 1),
@@ -95,8 +95,9 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "below the coarsest level, continue from the initial surface unless the previous level's "
        "result matches the images better"},
       {"alternate_directions", &R::alternate_directions, {},
-       "iterations other than a level's first and last use one direction per pair, alternating "
-       "(half the work); false: both directions every iteration"},
+       "iterations other than a level's first and last (with more than one pair group: its "
+       "first) use one direction per pair, alternating (half the work); false: both "
+       "directions every iteration"},
       {"pairs_per_iteration", &R::pairs_per_iteration, Range::AtLeast(0),
        "> 0: a level's iterations other than its first and its last few take the pairs in "
        "turn, this many at most; 0: every pair every iteration"},

@@ -33,7 +33,8 @@ struct RefineOptions {
                                    // max(this, the initial surface's cell), so that a coarse
                                    // start does not smooth away walls and structures of
                                    // twice this size
-  int iterations_per_level = 25;   // gradient steps per level (docs/benchmarks-history.md, session 14)
+  int iterations_per_level = 20;   // gradient steps per level (docs/benchmarks-history.md,
+                                   // sessions 14 and 32: 25 plain steps, 20 with momentum)
   double coarsest_iterations_factor = 2.0;  // the coarsest level, which starts from the
                                            // initial surface, takes this x
                                            // iterations_per_level gradient steps
@@ -41,8 +42,9 @@ struct RefineOptions {
   double beta = 0.1;               // weight of the thin-plate term (homogenised by 1/GSD²)
   double step = 0.5;               // gradient step, in units of (level GSD)²
   double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD
-  double momentum = 0;             // each vertex's move adds this x its previous move (heavy
-                                   // ball, MomentumStep; docs/benchmarks-history.md, session 31)
+  double momentum = 0.5;           // each vertex's move adds this x the move its last two
+                                   // agree on (heavy ball, MomentumStep, AgreedMove;
+                                   // docs/benchmarks-history.md, sessions 31 and 32)
   int zncc_window_radius = 2;      // ZNCC window (2r+1)²
   double min_window_valid = 0.5;   // min fraction of valid pixels in a ZNCC window
   double variance_floor = 1e-4;    // floor of the windows' variances (unit-range images)
@@ -105,8 +107,9 @@ struct RefineOptions {
                                      // (refine.cc, kKeepMargin); once it is higher by
                                      // > 0.01, finer levels skip the comparison
                                      // (kSkipCheckMargin)
-  bool alternate_directions = true;  // iterations other than a level's first and last use
-                                     // one direction per pair, alternating (half the work;
+  bool alternate_directions = true;  // iterations other than a level's first and last (with
+                                     // more than one pair group: its first) use one
+                                     // direction per pair, alternating (half the work;
                                      // same accuracy on synthetic scenes, BENCHMARKS.md);
                                      // false: both directions every iteration (the paper)
   int pairs_per_iteration = 16;    // > 0: a level's iterations other than its first and

@@ -111,22 +111,37 @@ TEST(Refine, PairsTakenInTurnConvergeAsEveryPairDoes) {
               mean_b, p95_b);
   EXPECT_LT(mean_b, 0.1);  // as TiltedPlaneStartedMetresOffConverges
   EXPECT_LT(p95_b, 0.25);
-  EXPECT_LT(mean_b, 1.5 * mean_a + 0.01);
+  // Every pair in one group also ends on both directions of each (0.047-0.050 m here, with
+  // or without momentum), which a grouped level does not (0.075-0.085 m): within 2x.
+  EXPECT_LT(mean_b, 2.0 * mean_a + 0.01);
   // The schedule: the first iteration both directions of every pair (6 pair-directions);
   // of the others, those before the last 6 one pair in one direction, the last 6 one
-  // direction of every pair; no pass after the last step.
+  // direction of every pair; no pass after the last step. Every pair every iteration (one
+  // group): the last iteration both directions again.
   ASSERT_EQ(a.levels.size(), b.levels.size());
   for (size_t l = 0; l < b.levels.size(); ++l) {
     const int later = b.levels[l].iterations - 1;
-    EXPECT_EQ(a.levels[l].pair_directions, 6 + later * 3) << "level " << l;
+    EXPECT_EQ(a.levels[l].pair_directions, 6 + (later - 1) * 3 + 6) << "level " << l;
     EXPECT_EQ(b.levels[l].pair_directions, 6 + (later - 6) * 1 + 6 * 3) << "level " << l;
   }
+}
+
+// The heavy ball carries what a vertex's last two moves agree on, per coordinate: the
+// smaller where they have the same sign, nothing where they swing (a pair's two directions).
+TEST(Refine, AgreedMoveCarriesOnlyWhatBothMovesAgreeOn) {
+  const Eigen::Vector3f agreed =
+      AgreedMove(Eigen::Vector3f(0.3f, -0.2f, 0.1f), Eigen::Vector3f(0.1f, 0.4f, 0.5f));
+  EXPECT_FLOAT_EQ(agreed.x(), 0.1f);  // same sign: the smaller move
+  EXPECT_FLOAT_EQ(agreed.y(), 0.f);   // a swing: nothing
+  EXPECT_FLOAT_EQ(agreed.z(), 0.1f);
+  EXPECT_EQ(AgreedMove(Eigen::Vector3f(-0.3f, 0.f, 0.2f), Eigen::Vector3f(-0.5f, 0.2f, 0.f)),
+            Eigen::Vector3f(-0.3f, 0.f, 0.f));  // a coordinate that did not move carries nothing
 }
 
 // momentum (MomentumStep): a move every iteration agrees on is made in fewer iterations than
 // by plain steps, where the steps are below the clamp (a plane started 2 GSD off, one level,
 // no pull towards the start, a small step: the regime of weakly textured or weakly
-// constrained surfaces), and the level's last plain steps still settle it.
+// constrained surfaces), and the iterations still settle it.
 TEST(Refine, MomentumMakesAConsistentMoveInFewerIterations) {
   const testing::Plane plane;
   const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
@@ -144,7 +159,7 @@ TEST(Refine, MomentumMakesAConsistentMoveInFewerIterations) {
     const double b = PlaneError(Refine(input, heavy).mesh, plane, 30).first;
     std::printf("%d iterations from 1 m: plain %.4f m, momentum 0.5 %.4f m\n", iterations, a, b);
     if (iterations == 10) {
-      EXPECT_LT(b, 0.75 * a);  // 4 heavy-ball steps, then 6 plain ones
+      EXPECT_LT(b, 0.75 * a);  // the first two steps carry nothing
     }
     if (iterations == 16) {
       EXPECT_LT(b, 0.1);  // 0.2 GSD, as the tests above
