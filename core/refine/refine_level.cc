@@ -401,9 +401,9 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     std::fill(seen.begin(), seen.end(), 0);
     if (it == information_from && it > 0) std::fill(information.begin(), information.end(), 0.0);
     // Iterations after the first take one direction per pair, alternating (from one turn
-    // through the groups to the next where the pairs are grouped), but the last (both_last).
-    const bool half = opt.alternate_directions && it > 0 && !(gathering == 1 && final_information) &&
-                      !(both_last && last);
+    // through the groups to the next where the pairs are grouped), but the last where the
+    // pairs are one group or it alone gathers level 0's information.
+    const bool half = opt.alternate_directions && it > 0 && !(last && (both_last || gathering == 1));
     const int turn = grouped ? (it - 1) / groups : it;
     const double zncc = PhotometricPass(views, slot, group_pairs, *mesh, normals, photo, &scratch,
                                         measure_only ? nullptr : &gradient,
