@@ -273,12 +273,16 @@ void FillFaceRecords(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f
   }
 }
 
-// Every pixel's hit point on its face (at its barycentrics), its parameter along the
-// pixel's ray (unit direction from the plane z = z_high) and its ray cosine; pixels for
-// which is_miss(p) holds become misses first.
+// Every pixel's hit point on its face, its parameter along the pixel's ray (unit direction
+// from the plane z = z_high) and its ray cosine; pixels for which is_miss(p) holds become
+// misses first. Made anew (along_ray false), the point is the face's at the rasterized
+// barycentrics, on the pixel's ray. Followed (along_ray true), the point moves along the
+// pixel's ray onto the face's moved plane (FollowHitMaps), from its last point, which is on
+// that ray; only a face seen at a grazing angle (|ray . normal| <= 0.05, which the warp
+// leaves out from 0.1) or without normals keeps the point at its barycentrics.
 template <class IsMiss>
 void FillHitPoints(const std::vector<FaceRecord>& records, bool with_ray_cos, ViewLevel* view,
-                   IsMiss is_miss) {
+                   IsMiss is_miss, bool along_ray) {
   HitMap& map = view->hit_map;
   const float z_high = float(view->camera.z_high());
   if (with_ray_cos) map.ray_cos.resize(map.hits.size());
@@ -293,8 +297,15 @@ void FillHitPoints(const std::vector<FaceRecord>& records, bool with_ray_cos, Vi
     }
     const FaceRecord& face = records[hit.face];
     const Eigen::Vector3f& direction = view->ray_directions[p];
-    if (with_ray_cos) map.ray_cos[p] = direction.dot(face.normal);  // RayCosine
-    const Eigen::Vector3f X = face.p0 + hit.u * face.e1 + hit.v * face.e2;
+    const float cosine = direction.dot(face.normal);  // RayCosine; 0 without normals
+    if (with_ray_cos) map.ray_cos[p] = cosine;
+    Eigen::Vector3f X;
+    if (along_ray && std::abs(cosine) > 0.05f) {
+      const Eigen::Vector3f& last = map.surface[p].point;
+      X = last + (face.normal.dot(face.p0 - last) / cosine) * direction;
+    } else {
+      X = face.p0 + hit.u * face.e1 + hit.v * face.e2;
+    }
     hit.t = (X.z() - z_high) / direction.z();
     map.surface[p].point = X;
   }
@@ -321,9 +332,10 @@ void RasterizeHitMapWith(const TriangleMesh& mesh, const std::vector<FaceRecord>
   // Pixels no face was drawn into (depth still infinite) become misses here, instead of
   // every pixel being cleared before drawing (one pass less over the 16-byte hits).
   const float* depth = ws.depth.data();
-  FillHitPoints(records, with_ray_cos, view, [depth](size_t p) {
-    return !(depth[p] < std::numeric_limits<float>::infinity());
-  });
+  FillHitPoints(
+      records, with_ray_cos, view,
+      [depth](size_t p) { return !(depth[p] < std::numeric_limits<float>::infinity()); },
+      /*along_ray=*/false);
 }
 
 }  // namespace
@@ -351,7 +363,7 @@ void UpdateHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
                           &scratch->threads[omp_get_thread_num()]);
     else if (update[v] == HitMapUpdate::kFollow)
       FillHitPoints(scratch->faces, face_normals != nullptr, &(*views)[v],
-                    [](size_t) { return false; });
+                    [](size_t) { return false; }, /*along_ray=*/true);
   }
 }
 

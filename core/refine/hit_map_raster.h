@@ -55,11 +55,15 @@ void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
                       const std::vector<Eigen::Vector3f>* face_normals = nullptr);
 
 // Between two rasterizations (or ray castings): each pixel keeps its face and barycentric
-// coordinates, and its hit point, ray parameter and ray cosine (when face_normals is not
-// null) follow the mesh's moved vertices. A vertex moves by at most max_step_gsd (0.5
-// level pixels) an iteration, typically a tenth of that, so a pixel's point leaves its ray
-// by a fraction of that move (RefineOptions::hit_maps_every; docs/benchmarks-history.md,
-// session 8).
+// coordinates (the gradient's weights), and its hit point moves along the pixel's ray onto
+// the face's moved plane (the exact hit while the ray still crosses that face), with its ray
+// parameter and ray cosine (when face_normals is not null; without them the point stays at
+// its barycentrics). A vertex moves by at most max_step_gsd (0.5 level pixels) an
+// iteration, typically a tenth of that, so a pixel's ray leaves its face only near the
+// face's edges between rasterizations (RefineOptions::hit_maps_every). Moving the point
+// with the face instead (at its barycentrics) put it off the ray by a share of the move
+// each iteration: a plane under a 15-35 degree pair went 0.085 -> 0.23 m off between 15
+// and 30 iterations (docs/benchmarks-history.md, session 33).
 void FollowHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
                    HitMapScratch* scratch, const std::vector<Eigen::Vector3f>* face_normals);
 

@@ -49,8 +49,9 @@ Eigen::Vector3d MomentumStep(const Eigen::Vector3d& gradient_step,
   return gradient_step + momentum * agreed_move.cast<double>();
 }
 
-// pairs_per_iteration: the iterations before a level's last that take every pair again.
-constexpr int kEveryPairAtTheEnd = 6;
+// pairs_per_iteration: the iterations at a level's end that take every pair again (6 before
+// session 33: the large jax job's levels 0.85x the time at 3, facades and F -0.3 points).
+constexpr int kEveryPairAtTheEnd = 3;
 
 // One thread's buffers of the photometric pass, kept across iterations: they are tens
 // of MB a thread at level 0, and fresh ones cost page faults and zeroing every pass.
@@ -333,8 +334,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // in turn, and updates only its views' hit maps (made anew every hit_maps_every turns,
   // else followed). The last kEveryPairAtTheEnd iterations take every pair again: one
   // group's step is a noisier one, and the surface ends where all pairs agree (the jax set
-  // at 300 m, 39 pairs in 3 groups: roofs NMAD 0.058 m without, 0.054 m with, as with every
-  // pair every iteration; docs/benchmarks-history.md, session 23).
+  // at 300 m, 39 pairs in 3 groups, plain steps: roofs NMAD 0.058 m without, 0.054 m with 6,
+  // as with every pair every iteration; docs/benchmarks-history.md, sessions 23 and 33).
   const int groups = PairGroups(int(ctx.pairs.size()), opt);
   std::vector<std::pair<int, int>> group_pairs;
   std::vector<PairEnergy> first_energies;  // the first iteration's, per pair-direction
@@ -368,10 +369,23 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const bool final_information = it >= information_from;
     const bool grouped = groups > 1 && it > 0 && it < iterations - kEveryPairAtTheEnd;
     group_pairs = PairGroup(ctx.pairs, grouped ? groups : 1, grouped ? (it - 1) % groups : 0);
-    // The group's views follow their faces (points moved with them), or are made anew.
-    std::fill(update.begin(), update.end(), grouped ? HitMapUpdate::kKeep : HitMapUpdate::kFollow);
-    for (const auto& [i, j] : group_pairs)
-      update[slot[i]] = update[slot[j]] = HitMapUpdate::kFollow;
+    // Iterations after the first take one direction per pair, alternating (from one turn
+    // through the groups to the next where the pairs are grouped), but the last where the
+    // pairs are one group or it alone gathers level 0's information.
+    const bool half = opt.alternate_directions && it > 0 && !(last && (both_last || gathering == 1));
+    const int turn = grouped ? (it - 1) / groups : it;
+    // The views whose pixels this iteration warps (the first of each direction) follow
+    // their faces, or are made anew; the others keep their hit maps. A view only warped
+    // into is read for visibility alone, within visibility_tolerance_gsd (2 GSD) of its
+    // points, which moved by a few tenths of a GSD at most since it was last followed
+    // (the jax set at 300 m: hit maps 14.6 -> 12.1 s, the same accuracy;
+    // docs/benchmarks-history.md, session 33).
+    std::fill(update.begin(), update.end(), HitMapUpdate::kKeep);
+    for (size_t k = 0; k < group_pairs.size(); ++k) {
+      const auto [i, j] = group_pairs[k];
+      if (!half || (turn + k) % 2 == 0) update[slot[i]] = HitMapUpdate::kFollow;
+      if (!half || (turn + k) % 2 == 1) update[slot[j]] = HitMapUpdate::kFollow;
+    }
     for (size_t v = 0; v < views.size(); ++v) {
       if (update[v] == HitMapUpdate::kFollow &&
           (it == 0 || it - made_at[v] >= opt.hit_maps_every * (grouped ? groups : 1))) {
@@ -400,11 +414,6 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
     std::fill(seen.begin(), seen.end(), 0);
     if (it == information_from && it > 0) std::fill(information.begin(), information.end(), 0.0);
-    // Iterations after the first take one direction per pair, alternating (from one turn
-    // through the groups to the next where the pairs are grouped), but the last where the
-    // pairs are one group or it alone gathers level 0's information.
-    const bool half = opt.alternate_directions && it > 0 && !(last && (both_last || gathering == 1));
-    const int turn = grouped ? (it - 1) / groups : it;
     const double zncc = PhotometricPass(views, slot, group_pairs, *mesh, normals, photo, &scratch,
                                         measure_only ? nullptr : &gradient,
                                         measure_only ? nullptr : &seen, half ? turn % 2 : -1,

@@ -151,10 +151,12 @@ TEST(RasterizeHitMap, SkipsFacesWithNonFiniteVertices) {
   EXPECT_GT(broken_hits, 0.9 * clean_hits);       // and nothing else
 }
 
-// Between rasterizations a pixel keeps its face; its point moves with the face. Moved by
-// a typical iteration's step (here up to 0.05 m = 0.1 GSD, in z and sideways), the
-// followed points stay within a fraction of the move of a fresh rasterization's, nearly
-// all on the same face; unmoved, they are the rasterization's exactly.
+// Between rasterizations a pixel keeps its face; its point moves along the pixel's ray
+// onto the face's moved plane. Moved by a typical iteration's step (here up to 0.05 m =
+// 0.1 GSD, in z and sideways), the followed points are a fresh rasterization's wherever
+// the ray still crosses the same face (median 0.0000 m; moved with the face at its
+// barycentrics instead, 0.018 m), nearly all of them; unmoved, they are the
+// rasterization's to float rounding.
 TEST(FollowHitMaps, PointsMoveWithTheirFacesCloseToAFreshRasterization) {
   const TriangleMesh mesh = BlockMesh(1.0);
   const RefineInput input = testing::MakePlaneInput(testing::Plane{}, {{25, 40}}, mesh, 120, 0.5);
@@ -175,9 +177,9 @@ TEST(FollowHitMaps, PointsMoveWithTheirFacesCloseToAFreshRasterization) {
   for (size_t p = 0; p < a.hits.size(); ++p) {
     ASSERT_EQ(a.surface[p].face, b.surface[p].face);
     if (a.surface[p].face < 0) continue;
-    ASSERT_EQ(a.surface[p].point, b.surface[p].point);
+    ASSERT_LT((a.surface[p].point - b.surface[p].point).norm(), 1e-4f);
     ASSERT_EQ(a.ray_cos[p], b.ray_cos[p]);
-    ASSERT_EQ(a.hits[p].t, b.hits[p].t);
+    ASSERT_NEAR(a.hits[p].t, b.hits[p].t, 1e-4f);
   }
 
   TriangleMesh moved = mesh;
@@ -208,7 +210,7 @@ TEST(FollowHitMaps, PointsMoveWithTheirFacesCloseToAFreshRasterization) {
   ASSERT_GT(both, 5000);
   EXPECT_GT(double(same_face) / both, 0.9);
   EXPECT_GT(double(close) / both, 0.98);
-  EXPECT_LT(median, 0.025f);  // below half the largest move
+  EXPECT_LT(median, 0.001f);  // on the ray: a fiftieth of the largest move
   EXPECT_GT(double(cos_close) / both, 0.95);
 }
 

@@ -111,18 +111,19 @@ TEST(Refine, PairsTakenInTurnConvergeAsEveryPairDoes) {
               mean_b, p95_b);
   EXPECT_LT(mean_b, 0.1);  // as TiltedPlaneStartedMetresOffConverges
   EXPECT_LT(p95_b, 0.25);
-  // Every pair in one group also ends on both directions of each (0.047-0.050 m here, with
-  // or without momentum), which a grouped level does not (0.075-0.085 m): within 2x.
+  // Every pair in one group also ends on both directions of each, which a grouped level
+  // does not: within 2x (0.065 / 0.050 m here; before session 33's hit maps, 0.047-0.050 /
+  // 0.075-0.085 m).
   EXPECT_LT(mean_b, 2.0 * mean_a + 0.01);
   // The schedule: the first iteration both directions of every pair (6 pair-directions);
-  // of the others, those before the last 6 one pair in one direction, the last 6 one
+  // of the others, those before the last 3 one pair in one direction, the last 3 one
   // direction of every pair; no pass after the last step. Every pair every iteration (one
   // group): the last iteration both directions again.
   ASSERT_EQ(a.levels.size(), b.levels.size());
   for (size_t l = 0; l < b.levels.size(); ++l) {
     const int later = b.levels[l].iterations - 1;
     EXPECT_EQ(a.levels[l].pair_directions, 6 + (later - 1) * 3 + 6) << "level " << l;
-    EXPECT_EQ(b.levels[l].pair_directions, 6 + (later - 6) * 1 + 6 * 3) << "level " << l;
+    EXPECT_EQ(b.levels[l].pair_directions, 6 + (later - 3) * 1 + 3 * 3) << "level " << l;
   }
 }
 
@@ -240,7 +241,7 @@ TEST(Refine, TwoViewStereoAtWideConvergenceRefines) {
     ASSERT_EQ(result.pairs.size(), 1u);
     EXPECT_NEAR(result.pair_details[0].angle_deg, gamma, 0.5);
     const auto [mean, p95] = PlaneError(result.mesh, plane, 30);
-    EXPECT_LT(mean, 0.1) << gamma;  // from 1 m
+    EXPECT_LT(mean, 0.15) << gamma;  // from 1 m (0.11-0.125: FollowedHitMapsDoNotDrift)
     EXPECT_LT(p95, 0.3) << gamma;
 
     RefineOptions with_bias = SmallOptions();
@@ -248,6 +249,31 @@ TEST(Refine, TwoViewStereoAtWideConvergenceRefines) {
     const RefineResult biased = Refine(input, with_bias);
     ASSERT_EQ(biased.view_bias_px.size(), 2u);
     EXPECT_LT(PlaneError(biased.mesh, plane, 30).first, 1.1) << gamma;  // no worse
+  }
+}
+
+// Between rasterizations a pixel's point follows its face along the pixel's ray
+// (FollowHitMaps), so the surface a pair converges to does not depend on how often the hit
+// maps are made anew, nor drift with more iterations. Moving the point with the face (at
+// its barycentrics) put it off the ray: the plane below, from 1 m off under a 15 / 35
+// degree pair, ended 0.084 / 0.087 m off after 15 iterations a level, 0.235 / 0.224 m after
+// 30 and 0.222 / 0.242 m after 60, and 0.36 / 0.25 m with hit maps made every 4th
+// iteration; made every iteration, 0.125 / 0.111 m (docs/benchmarks-history.md, session 33).
+TEST(Refine, FollowedHitMapsDoNotDrift) {
+  const testing::Plane plane;
+  for (const double gamma : {15.0, 35.0}) {
+    const auto input = testing::MakePlaneInput(plane, {{gamma / 2, 10}, {gamma / 2, 190}},
+                                               testing::PlaneMesh(plane, 40, 1.0, 1.0));
+    for (const auto& [iterations, every] : {std::pair{15, 1}, {15, 4}, {30, 2}}) {
+      RefineOptions options = SmallOptions();
+      options.iterations_per_level = iterations;
+      options.hit_maps_every = every;
+      const auto [mean, p95] = PlaneError(Refine(input, options).mesh, plane, 30);
+      std::printf("%.0f degrees, %d iterations, hit maps every %d: mean %.4f m, p95 %.4f m\n",
+                  gamma, iterations, every, mean, p95);
+      EXPECT_LT(mean, 0.17) << gamma << " " << iterations << " " << every;
+      EXPECT_LT(p95, 0.3) << gamma << " " << iterations << " " << every;
+    }
   }
 }
 
