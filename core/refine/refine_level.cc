@@ -60,6 +60,19 @@ struct PassScratch {
   PairWorkspace workspace;
 };
 
+// The pair-directions (i, j) of `pairs`: both, or with one_direction >= 0 pair k as (i, j)
+// if (one_direction + k) is even, else as (j, i).
+std::vector<std::pair<int, int>> PairDirections(const std::vector<std::pair<int, int>>& pairs,
+                                                int one_direction) {
+  std::vector<std::pair<int, int>> directions;
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    const auto [i, j] = pairs[k];
+    if (one_direction < 0) directions.insert(directions.end(), {{i, j}, {j, i}});
+    else directions.push_back((one_direction + k) % 2 == 0 ? std::pair{i, j} : std::pair{j, i});
+  }
+  return directions;
+}
+
 // Mean ZNCC over all pair-directions; fills the gradient and per-vertex pair counts.
 // Pair-directions run in parallel (one per thread, gathered per face by each thread's
 // accumulator, scattered to the vertices once at the end). The views' hit maps, with
@@ -72,14 +85,7 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
                        int one_direction = -1, std::vector<double>* information = nullptr,
                        std::vector<PairEnergy>* energies = nullptr,
                        std::vector<std::vector<float>>* windows = nullptr) {
-  // one_direction >= 0: pair k only as (i, j) if (one_direction + k) is even, else (j, i).
-  std::vector<std::pair<int, int>> directions;
-  for (size_t k = 0; k < pairs.size(); ++k) {
-    const auto [i, j] = pairs[k];
-    if (one_direction < 0) directions.insert(directions.end(), {{i, j}, {j, i}});
-    else if ((one_direction + k) % 2 == 0) directions.push_back({i, j});
-    else directions.push_back({j, i});
-  }
+  const std::vector<std::pair<int, int>> directions = PairDirections(pairs, one_direction);
   const bool accumulate = gradient || seen || information;
   double sum = 0;
   long count = 0;
@@ -344,9 +350,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // A level's last iteration takes both directions of every pair where the pairs are one
   // group: with one direction last, where the level ends depends on which one (the count's
   // parity: stereo 0.3 m roofs 0.229-0.235 m after an even count, 0.222-0.223 after an odd
-  // one; docs/benchmarks-history.md, session 32). With more groups the last iterations'
-  // directions alternate across the pairs, half of them ending on each, and both would cost
-  // 8% of the large jax job's level 0 for the same result.
+  // one; history, session 32). With more groups the last iterations' directions alternate
+  // across the pairs, and both would cost 8% of the jax job's level 0 for the same result.
   const bool both_last = groups == 1;
   // No pass after the last step only to measure (it cost 12% of level 0's photometric
   // work on the large job, and a rasterization of every view): at level 0 the last
@@ -374,18 +379,13 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     // pairs are one group or it alone gathers level 0's information.
     const bool half = opt.alternate_directions && it > 0 && !(last && (both_last || gathering == 1));
     const int turn = grouped ? (it - 1) / groups : it;
-    // The views whose pixels this iteration warps (the first of each direction) follow
-    // their faces, or are made anew; the others keep their hit maps. A view only warped
-    // into is read for visibility alone, within visibility_tolerance_gsd (2 GSD) of its
-    // points, which moved by a few tenths of a GSD at most since it was last followed
-    // (the jax set at 300 m: hit maps 14.6 -> 12.1 s, the same accuracy;
-    // docs/benchmarks-history.md, session 33).
+    const int one_direction = half ? turn % 2 : -1;
+    // Only the views this iteration warps (each direction's first) follow or are made anew:
+    // one only warped into is read for visibility, within 2 GSD, which its points a few
+    // tenths of a GSD old answer (jax 300 m: hit maps 14.6 -> 12.1 s; history, session 33).
     std::fill(update.begin(), update.end(), HitMapUpdate::kKeep);
-    for (size_t k = 0; k < group_pairs.size(); ++k) {
-      const auto [i, j] = group_pairs[k];
-      if (!half || (turn + k) % 2 == 0) update[slot[i]] = HitMapUpdate::kFollow;
-      if (!half || (turn + k) % 2 == 1) update[slot[j]] = HitMapUpdate::kFollow;
-    }
+    for (const auto& [i, j] : PairDirections(group_pairs, one_direction))
+      update[slot[i]] = HitMapUpdate::kFollow;
     for (size_t v = 0; v < views.size(); ++v) {
       if (update[v] == HitMapUpdate::kFollow &&
           (it == 0 || it - made_at[v] >= opt.hit_maps_every * (grouped ? groups : 1))) {
@@ -416,7 +416,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     if (it == information_from && it > 0) std::fill(information.begin(), information.end(), 0.0);
     const double zncc = PhotometricPass(views, slot, group_pairs, *mesh, normals, photo, &scratch,
                                         measure_only ? nullptr : &gradient,
-                                        measure_only ? nullptr : &seen, half ? turn % 2 : -1,
+                                        measure_only ? nullptr : &seen, one_direction,
                                         (it == 0 && (data_confidence || initial_prior)) ||
                                                 final_information
                                             ? &information
