@@ -90,9 +90,11 @@ void RasterizeFace(const TriangleMesh& mesh, const RasterVertex* verts, int f,
 }
 
 #ifdef SATMESH_HAVE_AVX2_LATTICE
-// Faces [0, n - n % 8) 8 at a time: those whose box holds at most 2 x 2 pixel centres
-// (nearly all at the refinement's resolution) are tested in float without branches; the
-// others go to RasterizeFace.
+// Faces [0, n - n % 8) 8 at a time: those whose box holds at most 3 x 3 pixel centres
+// (nearly all at the refinement's resolution: a 2-pixel triangle's box holds 2 or 3
+// centres a side) are tested in float without branches, 2 x 2 centres when none of the 8
+// needs 3; the others go to RasterizeFace (with 2 x 2 only, RasterizeFace took 10% of a
+// 300 m jax job; docs/benchmarks-history.md, session 34).
 SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVertex* verts,
                                      const BandTarget& t) {
   const size_t n8 = mesh.faces.size() / 8 * 8;
@@ -130,12 +132,16 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
     const __m256 any = _mm256_and_ps(finite, _mm256_and_ps(_mm256_cmp_ps(c0, c1, _CMP_LE_OQ),
                                                            _mm256_cmp_ps(r0, r1, _CMP_LE_OQ)));
     if (_mm256_testz_ps(any, any)) continue;
-    const __m256 small =
-        _mm256_and_ps(any, _mm256_and_ps(_mm256_cmp_ps(_mm256_sub_ps(c1, c0), one, _CMP_LE_OQ),
-                                         _mm256_cmp_ps(_mm256_sub_ps(r1, r0), one, _CMP_LE_OQ)));
+    const __m256 two = _mm256_set1_ps(2.f);
+    const __m256 span_c = _mm256_sub_ps(c1, c0), span_r = _mm256_sub_ps(r1, r0);
+    const __m256 small = _mm256_and_ps(any, _mm256_and_ps(_mm256_cmp_ps(span_c, two, _CMP_LE_OQ),
+                                                          _mm256_cmp_ps(span_r, two, _CMP_LE_OQ)));
     for (int big = _mm256_movemask_ps(_mm256_andnot_ps(small, any)); big; big &= big - 1)
       RasterizeFace(mesh, verts, int(f) + __builtin_ctz(big), t);
     if (_mm256_testz_ps(small, small)) continue;
+    const __m256 wide = _mm256_and_ps(small, _mm256_or_ps(_mm256_cmp_ps(span_c, one, _CMP_GT_OQ),
+                                                          _mm256_cmp_ps(span_r, one, _CMP_GT_OQ)));
+    const int side = _mm256_testz_ps(wide, wide) ? 2 : 3;  // centres tested a side
     // Edge k is opposite vertex k, from its lower vertex index: A (x - ax) + B (y - ay).
     __m256 A[3], B[3], ax[3], ay[3];
     for (int k = 0; k < 3; ++k) {
@@ -154,12 +160,13 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
     const __m256 sign = _mm256_and_ps(area, _mm256_set1_ps(-0.f));  // sign bit of the area
     const __m256 inv_area = _mm256_div_ps(one, area);
     const __m256 live = _mm256_and_ps(small, _mm256_cmp_ps(area, zero, _CMP_NEQ_OQ));
-    alignas(32) float us[4][8], vs[4][8], zs[4][8];
-    alignas(32) int ps[4][8];
-    uint32_t inside = 0;
-    for (int k = 0; k < 4; ++k) {
-      const __m256 col = _mm256_add_ps(c0, _mm256_set1_ps(float(k & 1)));
-      const __m256 row = _mm256_add_ps(r0, _mm256_set1_ps(float(k >> 1)));
+    alignas(32) float us[9][8], vs[9][8], zs[9][8];
+    alignas(32) int ps[9][8];
+    int inside[9];  // per centre k, its lanes inside
+    const int centres = side * side;
+    for (int k = 0; k < centres; ++k) {
+      const __m256 col = _mm256_add_ps(c0, _mm256_set1_ps(float(k % side)));
+      const __m256 row = _mm256_add_ps(r0, _mm256_set1_ps(float(k / side)));
       const __m256 px = _mm256_add_ps(col, half), py = _mm256_add_ps(row, half);
       __m256 w[3];
       __m256 in = _mm256_and_ps(live, _mm256_and_ps(_mm256_cmp_ps(col, c1, _CMP_LE_OQ),
@@ -179,14 +186,16 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
           reinterpret_cast<__m256i*>(ps[k]),
           _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(row), _mm256_set1_epi32(t.width)),
                            _mm256_cvttps_epi32(col)));
-      inside |= uint32_t(_mm256_movemask_ps(in)) << (8 * k);
+      inside[k] = _mm256_movemask_ps(in);
     }
-    for (; inside; inside &= inside - 1) {
-      const int bit = __builtin_ctz(inside), k = bit >> 3, lane = bit & 7;
-      const size_t p = size_t(ps[k][lane]);
-      if (!(zs[k][lane] < t.depth[p])) continue;
-      t.depth[p] = zs[k][lane];
-      t.hits[p] = RayHit{int(f) + lane, 0.f, us[k][lane], vs[k][lane]};
+    for (int k = 0; k < centres; ++k) {
+      for (int lanes = inside[k]; lanes; lanes &= lanes - 1) {
+        const int lane = __builtin_ctz(lanes);
+        const size_t p = size_t(ps[k][lane]);
+        if (!(zs[k][lane] < t.depth[p])) continue;
+        t.depth[p] = zs[k][lane];
+        t.hits[p] = RayHit{int(f) + lane, 0.f, us[k][lane], vs[k][lane]};
+      }
     }
   }
 }

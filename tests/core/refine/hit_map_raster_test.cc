@@ -68,6 +68,17 @@ TEST(RasterizeHitMap, AgreesWithEmbreeRayCastingAtTwoPixelsATriangle) {
   EXPECT_GT(double(a.close_t) / a.both, 0.998);      // and the same ray parameter
 }
 
+// Triangles of ~3 pixels: boxes of 2, 3 and 4 pixel centres a side, so faces of one batch
+// of 8 go to the AVX2 path at 2 x 2 and 3 x 3 centres and to the scalar one, side by side.
+TEST(RasterizeHitMap, AgreesWithEmbreeWhereTheVectorAndScalarPathsMeet) {
+  const Agreement a = CompareWithRaycast(BlockMesh(1.4), 30);
+  ASSERT_GT(a.both, 5000);
+  EXPECT_LT(double(a.hit_mismatch) / a.both, 0.001);
+  EXPECT_GT(double(a.same_face) / a.both, 0.998);
+  EXPECT_GT(double(a.close) / a.both, 0.998);
+  EXPECT_GT(double(a.close_t) / a.both, 0.998);
+}
+
 TEST(RasterizeHitMap, AgreesWithEmbreeOnLargeTrianglesAndSteepViews) {
   const Agreement a = CompareWithRaycast(BlockMesh(4.0), 35);
   ASSERT_GT(a.both, 5000);
