@@ -99,6 +99,7 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
                                      const BandTarget& t) {
   const size_t n8 = mesh.faces.size() / 8 * 8;
   const __m256 half = _mm256_set1_ps(0.5f), one = _mm256_set1_ps(1.f), zero = _mm256_setzero_ps();
+  const __m256 two = _mm256_set1_ps(2.f);
   const __m256 minus1 = _mm256_set1_ps(-1.f), all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
   const __m256 width = _mm256_set1_ps(float(t.width)), width_1 = _mm256_set1_ps(float(t.width - 1));
   const __m256 row_begin = _mm256_set1_ps(float(t.row_begin)),
@@ -132,7 +133,6 @@ SATMESH_AVX2 void RasterizeFacesAvx2(const TriangleMesh& mesh, const RasterVerte
     const __m256 any = _mm256_and_ps(finite, _mm256_and_ps(_mm256_cmp_ps(c0, c1, _CMP_LE_OQ),
                                                            _mm256_cmp_ps(r0, r1, _CMP_LE_OQ)));
     if (_mm256_testz_ps(any, any)) continue;
-    const __m256 two = _mm256_set1_ps(2.f);
     const __m256 span_c = _mm256_sub_ps(c1, c0), span_r = _mm256_sub_ps(r1, r0);
     const __m256 small = _mm256_and_ps(any, _mm256_and_ps(_mm256_cmp_ps(span_c, two, _CMP_LE_OQ),
                                                           _mm256_cmp_ps(span_r, two, _CMP_LE_OQ)));
