@@ -94,8 +94,10 @@ json DsmEvaluationToJson(const DsmEvaluation& e) {
 }
 
 json Mesh3dMetricsToJson(const Mesh3dMetrics& m) {
-  return {{"all", ScoresToJson(m.all)}, {"facade", ScoresToJson(m.facade)},
-          {"under_overhang", ScoresToJson(m.under_overhang)}};
+  json j = {{"all", ScoresToJson(m.all)}, {"facade", ScoresToJson(m.facade)},
+            {"under_overhang", ScoresToJson(m.under_overhang)}};
+  if (!m.seen_facade.thresholds_m.empty()) j["seen_facade"] = ScoresToJson(m.seen_facade);
+  return j;
 }
 
 json SurfaceEvaluationToJson(const SurfaceEvaluation& e) {
@@ -134,6 +136,8 @@ std::string FormatSceneEvaluation(const SceneEvaluation& e) {
     Add3dRows(rows, "3D all   ", e.result.mesh3d.all, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.all; });
     Add3dRows(rows, "3D facade", e.result.mesh3d.facade, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.facade; });
     Add3dRows(rows, "3D under overhangs", e.result.mesh3d.under_overhang, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.under_overhang; });
+    if (!e.result.mesh3d.seen_facade.thresholds_m.empty())
+      Add3dRows(rows, "3D facade seen by 2 views", e.result.mesh3d.seen_facade, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.seen_facade; });
   }
   std::string out = fmt::format("grid {}x{} cells, GSD {:g} m, {} roof-mask cells\n", e.grid_width,
                                 e.grid_height, e.gsd_m, e.num_mask_cells);

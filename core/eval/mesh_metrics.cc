@@ -118,8 +118,64 @@ std::vector<uint8_t> UnderOverhang(const TriangleMesh& mesh, const SurfaceSample
   return covered;
 }
 
+std::vector<uint8_t> SeenByViews(const TriangleMesh& mesh, const SurfaceSamples& samples,
+                                 const ViewDirections& directions, int min_views, double min_cos) {
+  const size_t n = samples.points.size();
+  std::vector<uint8_t> seen(n, 0);
+  if (n == 0 || mesh.faces.empty()) return seen;
+  std::vector<uint8_t> count(n, 0);
+  const RayScene scene(mesh);
+  std::vector<Ray> rays;
+  std::vector<size_t> index;
+  std::vector<uint8_t> occluded;
+  for (const auto& to_sensor : directions) {
+    SATMESH_CHECK(to_sensor.size() == n, ErrorCode::kInvalidArgument,
+                  "SeenByViews: a view has " + std::to_string(to_sensor.size()) +
+                      " directions for " + std::to_string(n) + " samples");
+    rays.clear();
+    index.clear();
+    for (size_t k = 0; k < n; ++k) {
+      const Eigen::Vector3f& d = to_sensor[k];
+      if (d.isZero() || double(samples.normals[k].dot(d)) < min_cos) continue;
+      Ray r;
+      r.origin = (samples.points[k] - mesh.origin).cast<float>() + 0.05f * samples.normals[k];
+      r.direction = d;
+      rays.push_back(r);
+      index.push_back(k);
+    }
+    occluded.assign(rays.size(), 0);
+    if (!rays.empty()) scene.Occluded(rays.data(), occluded.data(), rays.size());
+    for (size_t i = 0; i < rays.size(); ++i)
+      if (!occluded[i]) ++count[index[i]];
+  }
+  for (size_t k = 0; k < n; ++k) seen[k] = count[k] >= min_views;
+  return seen;
+}
+
+namespace {
+
+// The facade samples at least two views see on their own surface: the metric's selection.
+std::vector<uint8_t> SeenFacade(const TriangleMesh& mesh, const SurfaceSamples& samples,
+                                const std::vector<uint8_t>& is_facade, const ViewDirectionsFn& views) {
+  SurfaceSamples facade;
+  std::vector<size_t> index;
+  for (size_t k = 0; k < samples.points.size(); ++k)
+    if (is_facade[k]) {
+      facade.points.push_back(samples.points[k]);
+      facade.normals.push_back(samples.normals[k]);
+      index.push_back(k);
+    }
+  std::vector<uint8_t> selected(samples.points.size(), 0);
+  if (index.empty()) return selected;
+  const std::vector<uint8_t> seen = SeenByViews(mesh, facade, views(facade.points));
+  for (size_t i = 0; i < index.size(); ++i) selected[index[i]] = seen[i];
+  return selected;
+}
+
+}  // namespace
+
 Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& truth,
-                             const Mesh3dOptions& options) {
+                             const Mesh3dOptions& options, const ViewDirectionsFn* views) {
   const std::string msg = options.Check();
   SATMESH_CHECK(msg.empty(), ErrorCode::kInvalidArgument, "Mesh3dOptions: " + msg);
   std::vector<uint8_t> facade_result, facade_truth;
@@ -135,6 +191,10 @@ Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& tru
   m.facade = Scores(d_result, facade_result, d_truth, facade_truth, options.thresholds_m);
   m.under_overhang = Scores(d_result, UnderOverhang(result, s_result), d_truth,
                             UnderOverhang(truth, s_truth), options.thresholds_m);
+  if (views && *views) {
+    m.seen_facade = Scores(d_result, SeenFacade(result, s_result, facade_result, *views), d_truth,
+                           SeenFacade(truth, s_truth, facade_truth, *views), options.thresholds_m);
+  }
   return m;
 }
 

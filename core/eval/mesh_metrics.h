@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,26 @@ struct Mesh3dScores {
   size_t num_result_samples = 0, num_truth_samples = 0;
 };
 
+// The scene's views as the metrics see them: per view, per point (absolute, mesh CRS), the
+// unit direction from the point towards the view's sensor, or zero where the point falls
+// outside the view's image (SceneViewDirections builds it from the scene's RPC images).
+using ViewDirections = std::vector<std::vector<Eigen::Vector3f>>;
+using ViewDirectionsFn = std::function<ViewDirections(const std::vector<Eigen::Vector3d>&)>;
+
+// What the images can see, as photogrammetry needs it: a sample is seen by a view when it
+// lies in the view's image, faces the sensor with the cosine of its normal and the
+// direction at least kSeenMinCos (the engine's min_ray_cos default: grazing views
+// ignored) and nothing of `mesh` lies between them; a height needs two views. A wall
+// that one view or none sees is beyond any multi-view method.
+inline constexpr int kSeenMinViews = 2;
+inline constexpr double kSeenMinCos = 0.1;
+
+// Per sample: 1 if at least min_views of the views see it on `mesh` (the sample's own
+// surface; rays start 0.05 m off it along its normal).
+std::vector<uint8_t> SeenByViews(const TriangleMesh& mesh, const SurfaceSamples& samples,
+                                 const ViewDirections& directions, int min_views = kSeenMinViews,
+                                 double min_cos = kSeenMinCos);
+
 struct Mesh3dMetrics {
   Mesh3dScores all;     // every sample
   Mesh3dScores facade;  // facade samples only (on either side; distances to the whole surface)
@@ -59,14 +80,19 @@ struct Mesh3dMetrics {
   // walls under balconies and eaves, what a 2.5D surface cannot hold. Completeness: of
   // the truth's such samples; accuracy: of the result's.
   Mesh3dScores under_overhang;
+  // Facade samples at least two views see (SeenByViews, each surface's samples on itself):
+  // the facades a multi-view method can reach. Empty (no samples) without views.
+  Mesh3dScores seen_facade;
 };
 
 // Per sample of `mesh`: 1 if a vertical ray up from 0.1 m off the sample (along its
 // normal, out of the surface) hits `mesh`, i.e. the mesh covers the sample from above.
 std::vector<uint8_t> UnderOverhang(const TriangleMesh& mesh, const SurfaceSamples& samples);
 
-// Both meshes in the same CRS (origins may differ). Throws Error on invalid options.
+// Both meshes in the same CRS (origins may differ). `views` (may be null): the scene's
+// views, for seen_facade. Throws Error on invalid options.
 Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& truth,
-                             const Mesh3dOptions& options = {});
+                             const Mesh3dOptions& options = {},
+                             const ViewDirectionsFn* views = nullptr);
 
 }  // namespace satmesh

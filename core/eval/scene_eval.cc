@@ -9,6 +9,7 @@
 
 #include "core/common/error.h"
 #include "core/dsm/dsm.h"
+#include "core/eval/scene_views.h"
 #include "core/eval/stats.h"
 #include "core/eval/surface_distance.h"
 #include "core/mesh/mesh_io.h"
@@ -75,15 +76,17 @@ std::string SceneEvalOptions::Check() const {
 ScenePaths SceneLayout(const std::string& scene_dir) {
   const fs::path d(scene_dir);
   return {(d / "truth" / "mesh.ply").string(), (d / "truth" / "dsm.tif").string(),
-          (d / "truth" / "roof_mask.tif").string(), (d / "initial" / "dsm.tif").string()};
+          (d / "truth" / "roof_mask.tif").string(), (d / "initial" / "dsm.tif").string(),
+          (d / "images").string()};
 }
 
 SurfaceEvaluation EvaluateSurface(const Dsm& dsm, const TriangleMesh& mesh, const Dsm& truth_dsm,
                                   const std::vector<uint8_t>& mask, const TriangleMesh* truth_mesh,
-                                  const SceneEvalOptions& options) {
+                                  const SceneEvalOptions& options, const ViewDirectionsFn* views) {
   SurfaceEvaluation e;
   e.dsm = EvaluateDsm(dsm, truth_dsm, mask, options.dsm);
-  if (options.evaluate_3d && truth_mesh) e.mesh3d = EvaluateMesh3d(mesh, *truth_mesh, options.mesh3d);
+  if (options.evaluate_3d && truth_mesh)
+    e.mesh3d = EvaluateMesh3d(mesh, *truth_mesh, options.mesh3d, views);
   return e;
 }
 
@@ -126,11 +129,19 @@ SceneEvaluation EvaluateScene(const std::string& scene_dir, const TriangleMesh& 
   for (uint8_t m : mask) s.num_mask_cells += m;
   spdlog::info("eval: initial surface ({}x{} cells, {} roof cells)", s.grid_width, s.grid_height,
                s.num_mask_cells);
+  ViewDirectionsFn views;
+  if (options.evaluate_3d) {
+    const std::vector<std::string> images = SceneImages(paths.images_dir);
+    if (!images.empty()) {
+      views = SceneViewDirections(images, truth_mesh.crs);
+      spdlog::info("eval: {} views for the seen facades", images.size());
+    }
+  }
   const TriangleMesh initial_mesh = options.evaluate_3d ? MeshFromDsm(initial_dsm) : TriangleMesh{};
-  s.initial = EvaluateSurface(initial_dsm, initial_mesh, truth_dsm, mask, &truth_mesh, options);
+  s.initial = EvaluateSurface(initial_dsm, initial_mesh, truth_dsm, mask, &truth_mesh, options, &views);
   spdlog::info("eval: result surface ({} faces)", result.num_faces());
   const Dsm result_dsm = DsmFromMesh(result, truth_dsm);
-  s.result = EvaluateSurface(result_dsm, result, truth_dsm, mask, &truth_mesh, options);
+  s.result = EvaluateSurface(result_dsm, result, truth_dsm, mask, &truth_mesh, options, &views);
   if (options.evaluate_3d)
     s.error_by_sigma = ErrorBySigma(result, truth_mesh, options.mesh3d.crop_xmin,
                                     options.mesh3d.crop_xmax, options.mesh3d.crop_ymin,

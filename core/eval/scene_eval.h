@@ -49,9 +49,12 @@ std::vector<SigmaBin> ErrorBySigma(const TriangleMesh& result, const TriangleMes
 // The files of a scene directory, by the layout contract.
 struct ScenePaths {
   std::string truth_mesh, truth_dsm, roof_mask, initial_dsm;
+  std::string images_dir;  // the views' GeoTIFFs with RPCs (for the seen facades)
 };
 ScenePaths SceneLayout(const std::string& scene_dir);
 
+// The scene's images (ScenePaths::images_dir) give the 3D metrics' seen facades; a scene
+// without them is evaluated without (Mesh3dMetrics::seen_facade empty).
 // result_path: a mesh file (PLY/OBJ/..., scene CRS) or a result directory holding
 // mesh.ply. Throws Error{kNotFound} naming a missing file.
 SceneEvaluation EvaluateScene(const std::string& scene_dir, const std::string& result_path,
@@ -59,9 +62,11 @@ SceneEvaluation EvaluateScene(const std::string& scene_dir, const std::string& r
 SceneEvaluation EvaluateScene(const std::string& scene_dir, const TriangleMesh& result,
                               const SceneEvalOptions& options = {});
 
-// Evaluates one surface given both its DSM (on the truth grid) and its mesh.
+// Evaluates one surface given both its DSM (on the truth grid) and its mesh; `views` (may
+// be null): the scene's views, for the seen facades.
 SurfaceEvaluation EvaluateSurface(const Dsm& dsm, const TriangleMesh& mesh, const Dsm& truth_dsm,
                                   const std::vector<uint8_t>& mask, const TriangleMesh* truth_mesh,
-                                  const SceneEvalOptions& options);
+                                  const SceneEvalOptions& options,
+                                  const ViewDirectionsFn* views = nullptr);
 
 }  // namespace satmesh

@@ -9,7 +9,11 @@
 #include "core/common/error.h"
 #include "core/common/gdal_init.h"
 #include "core/dsm/dsm.h"
+#include "core/eval/scene_views.h"
+#include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
+#include "core/synth/scene_writer.h"
+#include "tests/tiny_scene.h"
 
 namespace satmesh {
 namespace {
@@ -111,6 +115,43 @@ TEST(ErrorBySigma, BinsTheResultsErrorByItsSigma) {
   }
   EXPECT_EQ(bins[10].vertices, size_t(n + 1));
   EXPECT_TRUE(std::isinf(bins[10].sigma_min_m));
+}
+
+// The views of a generated scene: at the AOI's centre each image's line of sight (from its
+// RPC) is the direction to the satellite that the generator measured on its camera
+// (scene.json's zenith and azimuth), within the CRS's grid convergence (0.33 deg here);
+// a point far outside every image gets none; the truth against itself finds every facade
+// sample two views see. The tiny city's tri-stereo is 3-13 deg off nadir: two of its
+// views see few walls at the 0.1 cosine.
+TEST(SceneViewDirections, LinesOfSightAreTheCamerasAndTheTruthFindsItsSeenFacades) {
+  const synth::SynthOptions o = testing::TinySceneOptions();
+  const fs::path dir = fs::temp_directory_path() / ("satmesh_eval_views_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const synth::SynthResult scene = synth::GenerateScene(dir.string(), o);
+  const std::vector<std::string> images = SceneImages((dir / "images").string());
+  ASSERT_EQ(images.size(), scene.views.size());
+  const ViewDirectionsFn views = SceneViewDirections(images, o.crs);
+  const Eigen::Vector3d lon_lat_h(o.center_lon_lat.x(), o.center_lon_lat.y(), o.base_height_m);
+  const Eigen::Vector3d centre = CrsTransform(kWgs84Geographic3D, o.crs).Apply(lon_lat_h);
+  const Eigen::Vector3d far_away = centre + Eigen::Vector3d(20000, 0, 0);
+  const ViewDirections d = views({centre, far_away});
+  ASSERT_EQ(d.size(), images.size());
+  for (size_t v = 0; v < d.size(); ++v) {
+    const double z = scene.views[v].zenith_deg * M_PI / 180, a = scene.views[v].azimuth_deg * M_PI / 180;
+    const Eigen::Vector3d expected(std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z));
+    const double angle_deg = std::acos(std::min(1.0, d[v][0].cast<double>().dot(expected))) * 180 / M_PI;
+    EXPECT_LT(angle_deg, 0.4) << images[v];
+    EXPECT_GT(scene.views[v].zenith_deg, 2.0);  // a meaningful azimuth
+    EXPECT_TRUE(d[v][1].isZero()) << images[v];
+  }
+  const SceneEvaluation e = EvaluateScene(dir.string(), (dir / "truth" / "mesh.ply").string());
+  const Mesh3dScores& seen = e.result.mesh3d.seen_facade;
+  ASSERT_FALSE(seen.thresholds_m.empty());
+  EXPECT_GT(seen.num_truth_samples, 20u);
+  EXPECT_LT(seen.num_truth_samples, e.result.mesh3d.facade.num_truth_samples);
+  EXPECT_GT(seen.completeness[0], 0.999);
+  EXPECT_EQ(e.initial.mesh3d.seen_facade.num_truth_samples, seen.num_truth_samples);
+  fs::remove_all(dir);
 }
 
 }  // namespace
