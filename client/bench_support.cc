@@ -14,7 +14,6 @@
 #include "core/common/error.h"
 #include "core/dsm/dsm.h"
 #include "core/dsm/fill_holes.h"
-#include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/hit_map_raster.h"
@@ -27,19 +26,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
-// Absolute vertices of `mesh` (in `crs`) into `frame`.
-TriangleMesh IntoFrame(const TriangleMesh& mesh, const std::string& crs, const LocalFrame& frame) {
-  std::vector<Eigen::Vector3d> points(mesh.vertices.size());
-  for (size_t i = 0; i < points.size(); ++i) points[i] = mesh.AbsoluteVertex(i);
-  CrsTransform(crs, kWgs84Geographic3D).Apply(&points);
-  TriangleMesh out;
-  out.faces = mesh.faces;
-  out.vertices.resize(points.size());
-  for (size_t i = 0; i < points.size(); ++i)
-    out.vertices[i] = frame.LocalFromGeo(points[i]).cast<float>();
-  return out;
 }
 
 }  // namespace
@@ -61,10 +47,10 @@ TriangleMesh LoadMeshInFrame(const std::string& path, const JobSpec& spec,
   if (ext == ".tif" || ext == ".tiff") {
     Dsm dsm = ReadDsm(file);
     if (filled) FillDsmHoles(&dsm, spec.fill_holes_m);
-    return IntoFrame(MeshFromDsm(dsm), dsm.crs_wkt, frame);
+    return MeshInFrame(MeshFromDsm(dsm), dsm.crs_wkt, frame);
   }
   const TriangleMesh mesh = ReadMesh(file);
-  return IntoFrame(mesh, mesh.crs.empty() ? default_crs : mesh.crs, frame);
+  return MeshInFrame(mesh, mesh.crs.empty() ? default_crs : mesh.crs, frame);
 }
 
 std::vector<std::pair<int, int>> ParsePairs(const std::string& text, int num_views) {

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 
+#include "core/mesh/topology.h"
+#include "core/refine/coarse_mesh.h"
+
 namespace satmesh {
 
 std::vector<float> VertexBendingM(const TriangleMesh& mesh, const VertexAdjacency& adjacency) {
@@ -103,6 +106,13 @@ TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surfa
   for (size_t i = 0; i < fresh.size(); ++i)
     if (std::isfinite(snap[i])) out.vertices[first_new + i] += snap[i] * fresh_normals[i];
   return out;
+}
+
+size_t SubdivideNearCreases(double tolerance_m, TriangleMesh* mesh) {
+  const std::vector<char> subdivide = FacesToSubdivide(*mesh, tolerance_m);
+  *mesh = SubdivideMarked(*mesh, subdivide);
+  SortSpatially(mesh);
+  return size_t(std::count(subdivide.begin(), subdivide.end(), 1));
 }
 
 }  // namespace satmesh

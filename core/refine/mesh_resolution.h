@@ -22,6 +22,10 @@ std::vector<float> VertexBendingM(const TriangleMesh& mesh, const VertexAdjacenc
 // sides. tolerance_m <= 0: every face (uniform subdivision).
 std::vector<char> FacesToSubdivide(const TriangleMesh& mesh, double tolerance_m);
 
+// Subdivides those faces (SubdivideMarked) and sorts the result spatially; returns how many
+// were subdivided. Between levels and in the crease pass (refine.cc).
+size_t SubdivideNearCreases(double tolerance_m, TriangleMesh* mesh);
+
 // Signed distance from each point to `surface` along its direction (unit): the nearest
 // hit of the two rays p + t d and p - t d within reach_m (positive: the surface lies on
 // the +d side; the + side wins a tie); NaN where neither ray meets it or d is zero.

@@ -14,6 +14,7 @@
 #include "core/refine/bias_estimation.h"
 #include "core/refine/carry_displacement.h"
 #include "core/refine/coarse_mesh.h"
+#include "core/refine/edge_bias.h"
 #include "core/refine/height_confidence.h"
 #include "core/refine/mesh_resolution.h"
 #include "core/refine/pairs.h"
@@ -219,14 +220,6 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
   }
   result->view_bias_px = estimate.bias_col_row_px;
   result->bias_s = SecondsSince(t0);
-}
-
-// Subdivides the faces near creases (FacesToSubdivide), between levels and in CreasePass.
-size_t SubdivideNearCreases(double tolerance_m, TriangleMesh* mesh) {
-  const std::vector<char> subdivide = FacesToSubdivide(*mesh, tolerance_m);
-  *mesh = SubdivideMarked(*mesh, subdivide);
-  SortSpatially(mesh);
-  return size_t(std::count(subdivide.begin(), subdivide.end(), 1));
 }
 
 // Step 4b, RefineOptions::crease_pass: level 0 run again from its result with the faces
@@ -489,6 +482,11 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
   options.crease_pass = ResolveCreasePass(options, input.initial_is_mesh, result.pairs.size());
   CoarseToFine(input, options, progress, views, &result, std::move(level0_start),
                level0_initial_zncc);
+
+  // 4c. The photometric term's outward bias at occluding edges taken off (edge_bias.h).
+  const double deflate_m = options.OccludingEdgeBiasPx(input.initial_is_mesh) * result.gsd_m;
+  const size_t deflated = DeflateOccludingEdges(deflate_m, &result.mesh).moved;
+  if (deflated > 0) spdlog::info("refine: {} wall vertices moved {:.2f} m inward", deflated, deflate_m);
 
   // 5. The initial surface kept where the images do not contradict it beyond their noise.
   KeepInitialWithinNoise(input, options, &result);

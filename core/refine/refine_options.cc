@@ -150,6 +150,12 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "moved as the coarser level moved it, not from the coarser level's result (the start's "
        "walls and eaves kept, its error corrected at the coarse scale); 1: on, 0: off, -1: on "
        "for a mesh start (a model the user trusts)"},
+      {"occluding_edge_bias_px", &R::occluding_edge_bias_px, Range::In(-1, 2),
+       "the photometric term's outward bias at occluding edges, in full-resolution pixels "
+       "(mixed pixels at a roof edge move with the roof between views, so ZNCC prefers walls "
+       "about half a pixel out): the finished surface's walls (faces steeper than 60 degrees) "
+       "are moved this far inward before the last step; 0: off; -1: 0.5 for a DSM start, off "
+       "for a mesh start (its walls are the user's model)"},
       {"hold_unseen", &R::hold_unseen, {},
        "vertices no pair-direction sees (occluded, grazing) do not move"},
       {"hold_boundary_xy", &R::hold_boundary_xy, {},

@@ -172,6 +172,12 @@ struct RefineOptions {
                                    // level's result: coarse levels correct the start at their
                                    // scale, the start's walls and eaves are kept; 1: on,
                                    // 0: off, -1: on for a mesh start
+  double occluding_edge_bias_px = -1;  // the photometric term's outward bias at occluding
+                                   // edges, in full-resolution pixels (edge_bias.h: mixed
+                                   // pixels move with the foreground): the finished surface's
+                                   // walls are moved this far inward (DeflateOccludingEdges)
+                                   // before the last step; 0: off; -1: 0.5 for a DSM start,
+                                   // off for a mesh start (its walls are the user's model)
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing
@@ -193,6 +199,10 @@ struct RefineOptions {
   // carry_coarse_levels resolved for a mesh start or a DSM start.
   bool CarriesCoarseLevels(bool initial_is_mesh) const {
     return carry_coarse_levels < 0 ? initial_is_mesh : carry_coarse_levels > 0;
+  }
+  // occluding_edge_bias_px resolved for a mesh start or a DSM start.
+  double OccludingEdgeBiasPx(bool initial_is_mesh) const {
+    return occluding_edge_bias_px < 0 ? (initial_is_mesh ? 0.0 : 0.5) : occluding_edge_bias_px;
   }
   // sunlit_pairs resolved for a mesh start or a DSM start.
   bool MatchesSunlitOnly(bool initial_is_mesh) const {

@@ -27,19 +27,22 @@ double Median(std::vector<float> values) {
 
 // The DSM, block-averaged by `factor`, as a mesh in `frame`.
 TriangleMesh DsmMeshInFrame(const Dsm& dsm, int factor, const LocalFrame& frame) {
-  const CrsTransform geo_from_dsm(dsm.crs_wkt, kWgs84Geographic3D);
-  TriangleMesh mesh = MeshFromDsm(DownsampleDsm(dsm, factor));
-  std::vector<Eigen::Vector3d> points(mesh.vertices.size());
-  for (size_t i = 0; i < points.size(); ++i) points[i] = mesh.AbsoluteVertex(i);
-  geo_from_dsm.Apply(&points);
-  mesh.origin.setZero();
-  mesh.crs.clear();
-  for (size_t i = 0; i < points.size(); ++i)
-    mesh.vertices[i] = frame.LocalFromGeo(points[i]).cast<float>();
-  return mesh;
+  return MeshInFrame(MeshFromDsm(DownsampleDsm(dsm, factor)), dsm.crs_wkt, frame);
 }
 
 }  // namespace
+
+TriangleMesh MeshInFrame(const TriangleMesh& mesh, const std::string& crs, const LocalFrame& frame) {
+  std::vector<Eigen::Vector3d> points(mesh.vertices.size());
+  for (size_t i = 0; i < points.size(); ++i) points[i] = mesh.AbsoluteVertex(i);
+  CrsTransform(crs, kWgs84Geographic3D).Apply(&points);
+  TriangleMesh out = mesh;
+  out.origin.setZero();
+  out.crs.clear();
+  for (size_t i = 0; i < points.size(); ++i)
+    out.vertices[i] = frame.LocalFromGeo(points[i]).cast<float>();
+  return out;
+}
 
 PixelWindow ImageWindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vector3d>& box_geo,
                          const RasterInfo& info, int margin_px) {

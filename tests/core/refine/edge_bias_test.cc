@@ -1,0 +1,89 @@
+// Walls moved inward by the photometric term's occluding-edge bias (edge_bias.h).
+#include "core/refine/edge_bias.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <tuple>
+
+namespace satmesh {
+namespace {
+
+// A 20 x 20 m ground grid (1 m) with a 6 x 6 x 5 m box on it (x, y in [7, 13]), its walls
+// in 1 m columns, all faces sharing their vertices (the ground's border is the mesh's
+// only open edge).
+TriangleMesh BoxOnGround() {
+  TriangleMesh m;
+  std::map<std::tuple<int, int, int>, int> index;
+  auto v = [&](int x, int y, int z) {
+    auto [it, added] = index.try_emplace({x, y, z}, int(m.vertices.size()));
+    if (added) m.vertices.emplace_back(float(x), float(y), float(z));
+    return it->second;
+  };
+  auto quad = [&](int a, int b, int c, int d) {  // counter-clockwise seen from outside
+    m.faces.emplace_back(a, b, c);
+    m.faces.emplace_back(a, c, d);
+  };
+  auto in_box = [](int x, int y) { return x >= 7 && x < 13 && y >= 7 && y < 13; };
+  for (int y = 0; y < 20; ++y)
+    for (int x = 0; x < 20; ++x) {
+      const int z = in_box(x, y) ? 5 : 0;
+      quad(v(x, y, z), v(x + 1, y, z), v(x + 1, y + 1, z), v(x, y + 1, z));
+    }
+  for (int t = 7; t < 13; ++t) {
+    quad(v(t, 7, 0), v(t + 1, 7, 0), v(t + 1, 7, 5), v(t, 7, 5));      // south, normal -y
+    quad(v(t + 1, 13, 0), v(t, 13, 0), v(t, 13, 5), v(t + 1, 13, 5));  // north, +y
+    quad(v(13, t, 0), v(13, t + 1, 0), v(13, t + 1, 5), v(13, t, 5));  // east, +x
+    quad(v(7, t + 1, 0), v(7, t, 0), v(7, t, 5), v(7, t + 1, 5));      // west, -x
+  }
+  return m;
+}
+
+TEST(DeflateOccludingEdges, WallsMoveInwardCornersIntoTheCornerTheRestStays) {
+  const TriangleMesh before = BoxOnGround();
+  TriangleMesh m = before;
+  const EdgeBiasStats stats = DeflateOccludingEdges(0.25, &m);
+  size_t wall_vertices = 0;
+  for (size_t i = 0; i < m.vertices.size(); ++i) {
+    const Eigen::Vector3f& p = before.vertices[i];
+    const Eigen::Vector3f d = m.vertices[i] - p;
+    EXPECT_EQ(d.z(), 0.f);
+    const bool on_x_wall = (p.x() == 7 || p.x() == 13) && p.y() >= 7 && p.y() <= 13;
+    const bool on_y_wall = (p.y() == 7 || p.y() == 13) && p.x() >= 7 && p.x() <= 13;
+    // Every wall vertex, top and foot, moves 0.25 m towards the box's inside; at a corner
+    // by 0.25 m from each wall.
+    const float ex = on_x_wall ? (p.x() == 7 ? 0.25f : -0.25f) : 0.f;
+    const float ey = on_y_wall ? (p.y() == 7 ? 0.25f : -0.25f) : 0.f;
+    EXPECT_NEAR(d.x(), ex, 1e-5) << p.transpose();
+    EXPECT_NEAR(d.y(), ey, 1e-5) << p.transpose();
+    wall_vertices += on_x_wall || on_y_wall;
+  }
+  EXPECT_EQ(wall_vertices, 2u * 24u);  // 24 columns' edges, at the top and at the foot
+  EXPECT_EQ(stats.moved, wall_vertices);
+  // Outward by the same distance, and back: the surface it started as.
+  TriangleMesh fat = before;
+  DeflateOccludingEdges(-0.25, &fat);
+  DeflateOccludingEdges(0.25, &fat);
+  for (size_t i = 0; i < fat.vertices.size(); ++i)
+    EXPECT_NEAR((fat.vertices[i] - before.vertices[i]).norm(), 0.f, 1e-5);
+  TriangleMesh same = before;
+  EXPECT_EQ(DeflateOccludingEdges(0, &same).moved, 0u);
+}
+
+// A wall on the mesh's open border (a tile's seam) keeps its place: a tile's neighbour
+// meets it there.
+TEST(DeflateOccludingEdges, BoundaryVerticesStay) {
+  TriangleMesh wall;
+  for (int z = 0; z <= 5; z += 5)
+    for (int x = 0; x <= 3; ++x) wall.vertices.emplace_back(float(x), 0.f, float(z));
+  for (int x = 0; x < 3; ++x) {
+    wall.faces.emplace_back(x, x + 1, x + 5);
+    wall.faces.emplace_back(x, x + 5, x + 4);
+  }
+  const TriangleMesh before = wall;
+  EXPECT_EQ(DeflateOccludingEdges(0.25, &wall).moved, 0u);
+  EXPECT_EQ(wall.vertices, before.vertices);
+}
+
+}  // namespace
+}  // namespace satmesh
