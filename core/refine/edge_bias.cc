@@ -9,6 +9,17 @@
 
 namespace satmesh {
 
+std::vector<char> WallVertices(const TriangleMesh& mesh) {
+  std::vector<char> on_wall(mesh.vertices.size(), 0);
+  for (const Eigen::Vector3i& f : mesh.faces) {
+    const Eigen::Vector3f& a = mesh.vertices[f[0]];
+    const Eigen::Vector3f n = (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a);
+    if (std::abs(n.z()) < kWallMaxNormalZ * n.norm())
+      on_wall[f[0]] = on_wall[f[1]] = on_wall[f[2]] = 1;
+  }
+  return on_wall;
+}
+
 EdgeBiasStats DeflateOccludingEdges(double distance_m, TriangleMesh* mesh) {
   EdgeBiasStats stats;
   if (distance_m == 0 || !std::isfinite(distance_m) || mesh->faces.empty()) return stats;

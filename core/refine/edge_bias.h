@@ -11,6 +11,8 @@
 // 0.4184; at 0.3 m GSD the best is 0.1-0.15 m out: 0.4-0.6 px either way
 // (docs/benchmarks-history.md, session 35). The refined walls end where the objective
 // peaks, so this bias is taken off at the end (Refine's step 4b).
+#include <vector>
+
 #include "core/mesh/mesh.h"
 
 namespace satmesh {
@@ -18,6 +20,9 @@ namespace satmesh {
 // A face is part of a wall (an occluding edge's flank) when its normal's |z| is below this
 // (steeper than 60 degrees).
 inline constexpr float kWallMaxNormalZ = 0.5f;
+
+// Per vertex, 1 if it belongs to a wall face (|normal z| < kWallMaxNormalZ).
+std::vector<char> WallVertices(const TriangleMesh& mesh);
 
 struct EdgeBiasStats {
   size_t moved = 0;  // vertices moved

@@ -11,7 +11,9 @@
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/height_confidence.h"
+#include "core/refine/edge_bias.h"
 #include "core/refine/hit_map_raster.h"
+#include "core/refine/momentum.h"
 #include "core/refine/photometric_gradient.h"
 #include "core/refine/sunlight.h"
 #include "core/refine/thin_plate.h"
@@ -35,19 +37,6 @@ namespace {
 // every level; from the DSM, 0.3 m roofs 0-4% better, facades within 0.3 points; pulling
 // in 3D below the coarsest level cost 0.3-0.5 points of facades).
 constexpr double kInitialPullPerIteration = 0.1;
-
-// The heavy-ball step (RefineOptions::momentum): the gradient step plus momentum x the move
-// the vertex's last two (clamped) moves agree on (AgreedMove). A move the iterations agree
-// on grows to 1 / (1 - momentum) gradient steps; the swing between a pair's two directions,
-// taken in turn, and between the pair groups is not carried at all. Carrying the last move
-// itself (the classic heavy ball) damps that swing only to 1 / (1 + momentum), and where
-// the level ends in it depended on the parity of the iteration count: the multi-date 0.3 m
-// set's roofs 10% worse with 20 iterations than with 21 or 25, even after 6 plain steps
-// (docs/benchmarks-history.md, sessions 31 and 32).
-Eigen::Vector3d MomentumStep(const Eigen::Vector3d& gradient_step,
-                             const Eigen::Vector3f& agreed_move, double momentum) {
-  return gradient_step + momentum * agreed_move.cast<double>();
-}
 
 // pairs_per_iteration: the iterations at a level's end that take every pair again (6 before
 // session 33: the large jax job's levels 0.85x the time at 3, facades and F -0.3 points).
@@ -183,14 +172,6 @@ double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& so
 }
 
 }  // namespace
-
-Eigen::Vector3f AgreedMove(const Eigen::Vector3f& last, const Eigen::Vector3f& before) {
-  Eigen::Vector3f agreed;
-  for (int c = 0; c < 3; ++c)
-    agreed[c] = last[c] * before[c] <= 0 ? 0.f
-                : std::abs(last[c]) < std::abs(before[c]) ? last[c] : before[c];
-  return agreed;
-}
 
 double LevelZncc(const RefineInput& input, const std::vector<PreparedView>& sources,
                  const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
@@ -461,6 +442,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const double max_move = opt.max_step_gsd * gsd;
     const double directions_per_pair = (half ? 1.0 : 2.0) / (grouped ? groups : 1);
     const float* confidence_of = confidence.data();
+    const std::vector<char> on_wall =
+        opt.wall_beta_factor < 1 ? WallVertices(*mesh) : std::vector<char>(nv, 0);
 #pragma omp parallel for schedule(static)
     for (long v = 0; v < long(nv); ++v) {
       if (opt.hold_unseen && seen[v] == 0) continue;  // no image constrains it
@@ -470,7 +453,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
           data_confidence
               ? double(confidence_of[v])
               : HeightConfidence(seen[v] / directions_per_pair * ctx.mean_pair_information, opt);
-      Eigen::Vector3d move = -photo_scale * g - smooth_scale / confidence * u2[v].cast<double>();
+      const double smooth = smooth_scale * (on_wall[v] ? opt.wall_beta_factor : 1.0) / confidence;
+      Eigen::Vector3d move = -photo_scale * g - smooth * u2[v].cast<double>();
       if (initial_prior) {
         Eigen::Vector3d off = (mesh->vertices[v] - start[v]).cast<double>();
         if (!coarsest) off.x() = off.y() = 0;  // below the coarsest: heights only

@@ -22,11 +22,6 @@ struct LevelContext {
   double gsd_m;
 };
 
-// The heavy ball's carried move (RefineOptions::momentum, MomentumStep): per coordinate,
-// the smaller of a vertex's last two moves where they have the same sign, else 0 (minmod):
-// what both directions of a pair, taken in turn, moved it by; their swing is not carried.
-Eigen::Vector3f AgreedMove(const Eigen::Vector3f& last, const Eigen::Vector3f& before);
-
 // pairs_per_iteration: `pairs` fall into PairGroups groups of at most that many (one
 // when it is 0), pair k into group k mod groups. A level's middle iterations take the
 // groups in turn (RefineLevel); the initial surface is measured on group 0 alone

@@ -40,6 +40,10 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"alpha", &R::alpha, Range::AtLeast(0), "weight of the photometric term (ZNCC)"},
       {"beta", &R::beta, Range::AtLeast(0),
        "weight of the thin-plate term (homogenised by 1/GSD^2)"},
+      {"wall_beta_factor", &R::wall_beta_factor, Range::AboveTo(0, 1),
+       "the thin-plate weight of a vertex of a wall face (steeper than 60 degrees) is this times "
+       "beta: a wall needs the creases at its top and foot that a uniform thin plate rounds off "
+       "(0.25: more of the facades, noisier walls); 1: uniform"},
       {"step", &R::step, Range::Above(0), "gradient step, in units of (level GSD)^2"},
       {"max_step_gsd", &R::max_step_gsd, Range::Above(0),
        "clamp of one vertex's move per iteration, in level GSD"},

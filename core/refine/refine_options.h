@@ -40,6 +40,11 @@ struct RefineOptions {
                                            // iterations_per_level gradient steps
   double alpha = 2.0;              // weight of the photometric term M
   double beta = 0.1;               // weight of the thin-plate term (homogenised by 1/GSD²)
+  double wall_beta_factor = 1.0;   // the thin-plate weight of a vertex of a wall face
+                                   // (kWallMaxNormalZ, edge_bias.h) is this x beta: a wall
+                                   // needs the creases at its top and foot that a uniform
+                                   // thin plate rounds off (0.25: multi-date facades +1.3 to
+                                   // +3.8 points, but 0.3 m F -0.8; BENCHMARKS.md); 1: uniform
   double step = 0.5;               // gradient step, in units of (level GSD)²
   double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD
   double momentum = 0.5;           // each vertex's move adds this x the move its last two

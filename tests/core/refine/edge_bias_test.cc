@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <map>
 #include <tuple>
 
@@ -68,6 +70,29 @@ TEST(DeflateOccludingEdges, WallsMoveInwardCornersIntoTheCornerTheRestStays) {
     EXPECT_NEAR((fat.vertices[i] - before.vertices[i]).norm(), 0.f, 1e-5);
   TriangleMesh same = before;
   EXPECT_EQ(DeflateOccludingEdges(0, &same).moved, 0u);
+}
+
+// The vertices of wall faces: the box's walls, top and foot, and nothing of the roof's or
+// the ground's insides.
+TEST(WallVertices, AreTheVerticesOfFacesSteeperThanSixtyDegrees) {
+  const TriangleMesh m = BoxOnGround();
+  const std::vector<char> on_wall = WallVertices(m);
+  ASSERT_EQ(on_wall.size(), m.vertices.size());
+  for (size_t i = 0; i < m.vertices.size(); ++i) {
+    const Eigen::Vector3f& p = m.vertices[i];
+    const bool rim = ((p.x() == 7 || p.x() == 13) && p.y() >= 7 && p.y() <= 13) ||
+                     ((p.y() == 7 || p.y() == 13) && p.x() >= 7 && p.x() <= 13);
+    EXPECT_EQ(bool(on_wall[i]), rim) << p.transpose();
+  }
+  // A 59-degree slope is not a wall, a 61-degree one is.
+  for (const float deg : {59.f, 61.f}) {
+    TriangleMesh ramp;
+    const float h = std::tan(deg * float(M_PI) / 180.f);
+    ramp.vertices = {{0, 0, 0}, {1, 0, h}, {1, 1, h}, {0, 1, 0}};
+    ramp.faces = {{0, 1, 2}, {0, 2, 3}};
+    const std::vector<char> w = WallVertices(ramp);
+    EXPECT_EQ(std::count(w.begin(), w.end(), 1), deg > 60 ? 4 : 0) << deg;
+  }
 }
 
 // A wall on the mesh's open border (a tile's seam) keeps its place: a tile's neighbour

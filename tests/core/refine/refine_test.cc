@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/refine/height_confidence.h"
+#include "core/refine/momentum.h"
 #include "core/refine/refine_level.h"
 #include "tests/core/refine/plane_scene.h"
 
