@@ -9,14 +9,25 @@
 
 namespace satmesh {
 
+namespace {
+
+// Face f's normal scaled by twice its area (the edges' cross product).
+Eigen::Vector3d AreaNormal(const TriangleMesh& mesh, const Eigen::Vector3i& f) {
+  const Eigen::Vector3f& a = mesh.vertices[f[0]];
+  return (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a).cast<double>();
+}
+
+// A wall face: steeper than kWallMaxNormalZ allows (a degenerate face is none).
+bool IsWall(const Eigen::Vector3d& area_normal) {
+  return std::abs(area_normal.z()) < double(kWallMaxNormalZ) * area_normal.norm();
+}
+
+}  // namespace
+
 std::vector<char> WallVertices(const TriangleMesh& mesh) {
   std::vector<char> on_wall(mesh.vertices.size(), 0);
-  for (const Eigen::Vector3i& f : mesh.faces) {
-    const Eigen::Vector3f& a = mesh.vertices[f[0]];
-    const Eigen::Vector3f n = (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a);
-    if (std::abs(n.z()) < kWallMaxNormalZ * n.norm())
-      on_wall[f[0]] = on_wall[f[1]] = on_wall[f[2]] = 1;
-  }
+  for (const Eigen::Vector3i& f : mesh.faces)
+    if (IsWall(AreaNormal(mesh, f))) on_wall[f[0]] = on_wall[f[1]] = on_wall[f[2]] = 1;
   return on_wall;
 }
 
@@ -31,11 +42,9 @@ EdgeBiasStats DeflateOccludingEdges(double distance_m, TriangleMesh* mesh) {
   std::vector<Eigen::Matrix2d> m(nv, Eigen::Matrix2d::Zero());
   std::vector<Eigen::Vector2d> b(nv, Eigen::Vector2d::Zero());
   for (const Eigen::Vector3i& f : mesh->faces) {
-    const Eigen::Vector3f& a = mesh->vertices[f[0]];
-    const Eigen::Vector3d n =
-        (mesh->vertices[f[1]] - a).cross(mesh->vertices[f[2]] - a).cast<double>();
+    const Eigen::Vector3d n = AreaNormal(*mesh, f);
+    if (!IsWall(n)) continue;
     const double area2 = n.norm(), horizontal = n.head<2>().norm();
-    if (!(horizontal > 0) || std::abs(n.z()) >= double(kWallMaxNormalZ) * area2) continue;
     const Eigen::Vector2d h = n.head<2>() / horizontal;
     for (int k = 0; k < 3; ++k) {
       m[f[k]] += area2 * h * h.transpose();

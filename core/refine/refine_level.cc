@@ -10,8 +10,8 @@
 #include "core/common/stage_time.h"
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
-#include "core/refine/height_confidence.h"
 #include "core/refine/edge_bias.h"
+#include "core/refine/height_confidence.h"
 #include "core/refine/hit_map_raster.h"
 #include "core/refine/momentum.h"
 #include "core/refine/photometric_gradient.h"
@@ -442,8 +442,9 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const double max_move = opt.max_step_gsd * gsd;
     const double directions_per_pair = (half ? 1.0 : 2.0) / (grouped ? groups : 1);
     const float* confidence_of = confidence.data();
+    // wall_beta_factor: the wall vertices (none looked for at 1, the default).
     const std::vector<char> on_wall =
-        opt.wall_beta_factor < 1 ? WallVertices(*mesh) : std::vector<char>(nv, 0);
+        opt.wall_beta_factor < 1 ? WallVertices(*mesh) : std::vector<char>();
 #pragma omp parallel for schedule(static)
     for (long v = 0; v < long(nv); ++v) {
       if (opt.hold_unseen && seen[v] == 0) continue;  // no image constrains it
@@ -453,7 +454,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
           data_confidence
               ? double(confidence_of[v])
               : HeightConfidence(seen[v] / directions_per_pair * ctx.mean_pair_information, opt);
-      const double smooth = smooth_scale * (on_wall[v] ? opt.wall_beta_factor : 1.0) / confidence;
+      const double smooth = smooth_scale * (!on_wall.empty() && on_wall[v] ? opt.wall_beta_factor : 1.0) / confidence;
       Eigen::Vector3d move = -photo_scale * g - smooth * u2[v].cast<double>();
       if (initial_prior) {
         Eigen::Vector3d off = (mesh->vertices[v] - start[v]).cast<double>();
