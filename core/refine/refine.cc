@@ -16,6 +16,7 @@
 #include "core/refine/coarse_mesh.h"
 #include "core/refine/edge_bias.h"
 #include "core/refine/height_confidence.h"
+#include "core/refine/level_start.h"
 #include "core/refine/mesh_resolution.h"
 #include "core/refine/pairs.h"
 #include "core/refine/refine_level.h"
@@ -44,10 +45,6 @@ constexpr double kCarriedLevelSigmaGsd = 0.5;
 // while a DSM as sharp as the images ties with it (Pléiades: < 0.001).
 constexpr double kSkipCheckMargin = 0.01;
 
-// FollowInitialDetail looks for the initial surface within this many GSDs of the coarse
-// mesh: farther, the coarse mesh is not an approximation of it there (a hole, a cut).
-constexpr double kInitialDetailReachGsd = 4;
-
 void CheckInput(const RefineInput& input) {
   SATMESH_CHECK(input.views.size() >= 2, ErrorCode::kInvalidInput,
                 "refine: need at least 2 views, got " + std::to_string(input.views.size()));
@@ -57,132 +54,6 @@ void CheckInput(const RefineInput& input) {
                 "refine: the initial mesh has no faces");
   SATMESH_CHECK(input.max_z > input.min_z, ErrorCode::kInvalidInput,
                 "refine: empty height range [min_z, max_z]");
-}
-
-// Triangle edge of `level`, metres: coarse_edge_px level pixels.
-double LevelEdge(const RefineOptions& options, double gsd_m, int level) {
-  return options.coarse_edge_px * gsd_m * std::ldexp(1.0, level);
-}
-
-// The median vertex's height sigma from the images (+inf, unseen, sorts last); NaN for no
-// vertex. The tests of LevelStartMesh and ChooseCoarseStart.
-double MedianVertexSigma(std::vector<float> sigma) {
-  if (sigma.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const auto middle = sigma.begin() + long(sigma.size() / 2);
-  std::nth_element(sigma.begin(), middle, sigma.end());
-  return *middle;
-}
-
-// `mesh` remeshed isotropically to the triangle edge of `level`, a DSM start's creases kept
-// (kDsmCreaseAngleDeg). With options.grid_start (resolved: ChooseCoarseStart): a DSM
-// start's own grid with cells of that edge (block means), else `mesh` as it is. (The
-// initial mesh's cells: InitialMeshCell. From the synthetic noisy DSM, 1-pixel cells at the
-// coarse level of a 0.3 m job refine roofs 8-13% worse than 2-pixel cells, equal to the
-// remesh's: docs/benchmarks-history.md, session 24.)
-TriangleMesh RemeshForLevel(const RefineInput& input, TriangleMesh mesh,
-                            const RefineOptions& options, double gsd_m, int level,
-                            const Progress& progress, double grid_cell_m = 0) {
-  if (options.grid_start > 0) {
-    if (input.initial_is_mesh || !input.initial_for_edge) return mesh;
-    return input.initial_for_edge(2 * LevelEdge(options, gsd_m, level));  // cells of one edge
-  }
-  const double edge_m = GridKeepingTargetEdge(LevelEdge(options, gsd_m, level), grid_cell_m);
-  const double creases = input.initial_is_mesh ? 0 : kDsmCreaseAngleDeg;
-  return RemeshIsotropic(mesh, {.target_edge_m = edge_m, .crease_angle_deg = creases}, progress);
-}
-
-// The initial surface meshed for `level` (before remeshing): what a level below the
-// coarsest measures and, if it wins, restarts from.
-TriangleMesh InitialSurfaceAt(const RefineInput& input, const RefineOptions& options,
-                              double gsd_m, int level) {
-  if (!input.initial_for_edge) return input.initial_mesh;
-  return input.initial_for_edge(LevelEdge(options, gsd_m, level));
-}
-
-// The mesh a level starts from, made from the initial surface: remeshed to the level's
-// triangle edge (the coarsest level and a finer level of a carried start:
-// CarriesCoarseLevels). At full resolution (level 0) where the images do not
-// resolve the surface to initial_detail_gsd (the median vertex's height sigma from the
-// pairs, LevelHeightSigma, above it: a stereo or tri-stereo pass), that mesh is subdivided
-// where it cannot hold the initial surface's detail (FollowInitialDetail): the iterations
-// at one level do not win back what the 2-pixel mesh smooths away (synthetic 0.7 m stereo
-// and tri-stereo, F-score @0.5 m 2-3 points higher; multi-date views resolve it and lose
-// 1 point of facades with it; docs/benchmarks-history.md, session 18). median_sigma_m: that
-// median (NaN where the test did not run).
-TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& options,
-                          const std::vector<PreparedView>& views,
-                          const std::vector<std::pair<int, int>>& pairs, double gsd_m,
-                          const Progress& progress, int level, double* median_sigma_m = nullptr) {
-  if (median_sigma_m) *median_sigma_m = std::numeric_limits<double>::quiet_NaN();
-  const bool coarsest = level == options.levels;  // GridKeepingTargetEdge from two pairs on
-  TriangleMesh mesh = RemeshForLevel(
-      input, coarsest ? input.initial_mesh : InitialSurfaceAt(input, options, gsd_m, level),
-      options, gsd_m, level, progress, coarsest && pairs.size() > 1 ? input.initial_mesh_cell_m : 0);
-  if (level != 0 || options.grid_start > 0 || !(options.initial_detail_gsd > 0))
-    return mesh;
-  const double tolerance_m = options.initial_detail_gsd * gsd_m;
-  const double median =
-      MedianVertexSigma(LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh));
-  if (median_sigma_m) *median_sigma_m = median;
-  if (!(median > tolerance_m)) {
-    spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex), within "
-                 "{:.2f} m: the coarse mesh is kept at {} pixels",
-                 std::isnan(median) ? 0.0 : median, tolerance_m, options.coarse_edge_px);
-    return mesh;
-  }
-  const RayScene initial(input.initial_mesh);  // after the test: a DSM mesh of millions of faces
-  size_t subdivided = 0;
-  const size_t faces_before = mesh.num_faces();
-  mesh = FollowInitialDetail(mesh, initial, tolerance_m, kInitialDetailReachGsd * gsd_m,
-                             &subdivided);
-  SortSpatially(&mesh);
-  spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex): {} of {} "
-               "faces of the coarse mesh subdivided where the initial surface departs from them "
-               "by more than {:.2f} m ({} faces)",
-               median, subdivided, faces_before, tolerance_m, mesh.num_faces());
-  return mesh;
-}
-
-// Step 4a, RefineOptions::grid_start -1: the coarse start of a DSM start. The DSM's own
-// grid at the levels' triangle edge (with the umbrella weighted by 1 / edge length) where
-// the images resolve the median vertex's height at full resolution to initial_detail_gsd:
-// there the images form the walls the grid lacks, better than from the remesh's walls
-// (multi-date 0.5 m s1 / s2: facades 37.8 / 33.2 -> 48.8 / 38.9%, roofs 0.210 / 0.230 ->
-// 0.199 / 0.223 m; docs/benchmarks-history.md, session 25). Else (a stereo pair, a
-// tri-stereo: 0.4-1.0 GSD on the grid, against 0.03-0.17 GSD for multi-date sets) the
-// remesh, which keeps the DSM's walls: one pass does not form them (stereo 0.5 m s1
-// facades 24.2% from the remesh, 19.1% from the grid). One pair never takes the grid: the
-// two views of a pass see the walls of at most two sides, and on the real Pléiades pair
-// 01-03 (0.24 GSD on the grid, within the tolerance) the grid left the held-out view's
-// pairs' ZNCC 0.0017 / 0.0014 lower than the remesh. The test measures the level-0
-// grid through the initial check's pairs (InitialCheckPairs: a third of the jax set's 39
-// pairs: 1.8 s on its 300 m tile, 3.6-6.2 s a large-job tile). Returns 1 for the grid, 0
-// for the remesh; `grid`: that grid where it is the start of a job without coarser levels;
-// `grid_zncc`: where the grid is taken, its mean ZNCC over those pairs, which level 0's
-// initial-surface check compares with (the grid is what a restart there starts from).
-int ChooseCoarseStart(const RefineInput& input, const RefineOptions& options,
-                      const std::vector<PreparedView>& views,
-                      const std::vector<std::pair<int, int>>& pairs, double gsd_m,
-                      std::optional<TriangleMesh>* grid, double* grid_zncc) {
-  if (options.grid_start >= 0) return options.grid_start;
-  if (input.initial_is_mesh || !input.initial_for_edge || !(options.initial_detail_gsd > 0) ||
-      pairs.size() < 2)
-    return 0;
-  TriangleMesh mesh = input.initial_for_edge(2 * LevelEdge(options, gsd_m, 0));
-  LevelMeasure measure =
-      MeasureLevel(input, views, InitialCheckPairs(pairs, options), options, gsd_m, 0, mesh);
-  const double median = MedianVertexSigma(std::move(measure.height_sigma));
-  if (std::isnan(median)) return 0;
-  const double tolerance_m = options.initial_detail_gsd * gsd_m;
-  const bool resolves = median <= tolerance_m;
-  spdlog::info("refine: the images resolve the DSM's grid at full resolution to {:.2f} m "
-               "(median vertex, {}within {:.2f} m): the coarse mesh is {}",
-               median, resolves ? "" : "not ", tolerance_m,
-               resolves ? "the DSM's grid, the images form the walls"
-                        : "the DSM mesh remeshed, its walls kept");
-  if (resolves && options.levels == 0) *grid = std::move(mesh);
-  if (resolves && options.rasterize_hit_maps) *grid_zncc = measure.mean_zncc;  // as the check
-  return resolves ? 1 : 0;
 }
 
 // Step 2: the pairs, or an error that says why there is none.
@@ -246,10 +117,13 @@ void CreasePass(const LevelContext& ctx, TriangleMesh* mesh, RefineResult* resul
   result->levels.push_back(std::move(stats));
 }
 
-// crease_pass -1: on for a DSM start without coarser levels and with more than one pair.
-int ResolveCreasePass(const RefineOptions& options, bool initial_is_mesh, size_t num_pairs) {
+// crease_pass -1: on for a DSM start without coarser levels and with more than one pair,
+// unless level 0 starts from the adaptive start (its walls have 1-pixel triangles already;
+// level_start.cc, AdaptiveStart).
+int ResolveCreasePass(const RefineOptions& options, bool initial_is_mesh, size_t num_pairs,
+                      bool adaptive_start) {
   if (options.crease_pass >= 0) return options.crease_pass;
-  return options.levels == 0 && !initial_is_mesh && num_pairs > 1 ? 1 : 0;
+  return options.levels == 0 && !initial_is_mesh && num_pairs > 1 && !adaptive_start ? 1 : 0;
 }
 
 // Step 4: coarse to fine. Below the coarsest level, the previous level's result
@@ -479,7 +353,13 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
                    median_sigma_m, kCarriedLevelSigmaGsd);
     }
   }
-  options.crease_pass = ResolveCreasePass(options, input.initial_is_mesh, result.pairs.size());
+  options.flat_edge_px = ResolveFlatEdge(options, input.initial_is_mesh, result.pairs.size());
+  bool adaptive_start = false;
+  if (options.levels == 0 && !level0_start)
+    level0_start = LevelStartMesh(input, options, views, result.pairs, result.gsd_m, progress, 0,
+                                  nullptr, &adaptive_start);
+  options.crease_pass =
+      ResolveCreasePass(options, input.initial_is_mesh, result.pairs.size(), adaptive_start);
   CoarseToFine(input, options, progress, views, &result, std::move(level0_start),
                level0_initial_zncc);
 

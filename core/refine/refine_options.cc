@@ -85,6 +85,12 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "a full-resolution start (no coarser level) whose images resolve the median vertex's "
        "height to worse than this many GSDs: faces of the coarse mesh the initial surface "
        "departs from by more than that are subdivided, their new vertices put on it; 0: off"},
+      {"flat_edge_px", &R::flat_edge_px, Range::In(-1, 16),
+       "a DSM start remeshed at full resolution (no coarser level, grid_start 0): its "
+       "triangles' edge in pixels where the initial surface is planar, halved where the "
+       "initial surface departs from them by more than initial_detail_gsd, down to half of "
+       "coarse_edge_px; at most coarse_edge_px: off; -1: 2 x coarse_edge_px with more than "
+       "one pair, else off"},
       {"grid_start", &R::grid_start, Range::In(-1, 1),
        "the coarse mesh of a DSM start: 1: the DSM's own grid at the level's triangle edge, the "
        "thin plate's umbrella weighing each neighbour by 1 / edge length, so the images form the "
@@ -94,7 +100,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"crease_pass", &R::crease_pass, Range::In(-1, 1),
        "after the full-resolution level, the faces near its creases (off their neighbours' "
        "plane by more than flat_tolerance_gsd) are subdivided and the level runs again on them; "
-       "1: on, 0: off, -1: on for a DSM start without coarser levels and with more than one pair"},
+       "1: on, 0: off, -1: on for a DSM start without coarser levels and with more than one pair, "
+       "unless flat_edge_px makes its start adaptive"},
       {"restart_from_initial", &R::restart_from_initial, {},
        "below the coarsest level, continue from the initial surface unless the previous level's "
        "result matches the images better"},

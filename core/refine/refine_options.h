@@ -87,6 +87,14 @@ struct RefineOptions {
                                      // initial surface departs from by more than that are
                                      // subdivided, their new vertices put on it
                                      // (refine.cc, LevelStartMesh); 0: off
+  double flat_edge_px = -1;        // a DSM start remeshed at full resolution (no coarser
+                                   // level, grid_start 0): its triangles' edge in pixels
+                                   // where the initial surface is planar, halved where the
+                                   // initial surface departs from them by more than
+                                   // initial_detail_gsd down to half of coarse_edge_px (a mesh
+                                   // whose resolution follows the surface; level_start.cc,
+                                   // AdaptiveStart); at most coarse_edge_px: off; -1: 2 x
+                                   // coarse_edge_px with more than one pair, else off
   int grid_start = -1;             // the coarse mesh of a DSM start: 1: the DSM's own grid
                                    // at the level's triangle edge, the thin plate's
                                    // umbrella weighing each neighbour by 1 / edge length
@@ -104,7 +112,8 @@ struct RefineOptions {
                                    // is run again on them: the walls' triangles get 1 pixel
                                    // where a coarser level would have given the subdivision;
                                    // 1: on, 0: off, -1: on for a DSM start without
-                                   // coarser levels and with more than one pair (refine.cc,
+                                   // coarser levels and with more than one pair, unless
+                                   // flat_edge_px makes its start adaptive (refine.cc,
                                    // CreasePass)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous

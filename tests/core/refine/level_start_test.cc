@@ -7,6 +7,7 @@
 #include <limits>
 #include <random>
 
+#include "core/refine/level_start.h"
 #include "core/refine/refine.h"
 #include "core/refine/refine_level.h"
 #include "tests/core/refine/plane_scene.h"
@@ -18,6 +19,38 @@ using testing::PlaneError;
 using testing::PlaneWithInitialSurfaces;
 using testing::SmallOptions;
 using testing::SmallOptionsTwoPairs;
+
+// flat_edge_px: a start of 4 pixels is halved twice where the initial surface departs from
+// it (4 -> 2 -> 1 pixel, as the 2-pixel remesh is halved once); 2 once; 8 three times.
+TEST(LevelStart, DetailRoundsHalveTheFlatEdgeToHalfTheCoarseEdge) {
+  EXPECT_EQ(DetailRounds(4, 2), 2);
+  EXPECT_EQ(DetailRounds(2, 2), 1);
+  EXPECT_EQ(DetailRounds(8, 2), 3);
+  EXPECT_EQ(DetailRounds(3, 2), 2);  // 3 -> 1.5 -> 0.75
+  EXPECT_EQ(DetailRounds(1, 2), 1);
+}
+
+// flat_edge_px -1: twice coarse_edge_px for a DSM start remeshed without coarser levels and
+// with more than one pair; the level's edge for one pair, a mesh start, the grid start or
+// coarser levels; a value the user gives is kept.
+TEST(LevelStart, TheFlatEdgeIsTwiceTheCoarseEdgeForARemeshedDsmStartWithPairs) {
+  RefineOptions o;
+  o.levels = 0;
+  o.grid_start = 0;
+  ASSERT_EQ(o.flat_edge_px, -1);
+  EXPECT_EQ(ResolveFlatEdge(o, /*initial_is_mesh=*/false, 3), 2 * o.coarse_edge_px);
+  EXPECT_EQ(ResolveFlatEdge(o, false, 1), o.coarse_edge_px);
+  EXPECT_EQ(ResolveFlatEdge(o, true, 3), o.coarse_edge_px);
+  RefineOptions grid = o, coarser = o, given = o;
+  grid.grid_start = 1;
+  EXPECT_EQ(ResolveFlatEdge(grid, false, 3), o.coarse_edge_px);
+  coarser.levels = 1;
+  EXPECT_EQ(ResolveFlatEdge(coarser, false, 3), o.coarse_edge_px);
+  given.flat_edge_px = 6;
+  EXPECT_EQ(ResolveFlatEdge(given, false, 1), 6);
+  given.flat_edge_px = 0;
+  EXPECT_EQ(ResolveFlatEdge(given, false, 3), 0);
+}
 
 // grid_start 1: a DSM start's coarse level is the DSM's own grid with cells of that
 // level's triangle edge (initial_for_edge at twice the edge), not the initial mesh's finer

@@ -1,0 +1,198 @@
+#include "core/refine/level_start.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/raycast/ray_scene.h"
+#include "core/refine/coarse_mesh.h"
+#include "core/refine/mesh_resolution.h"
+#include "core/refine/refine_level.h"
+
+namespace satmesh {
+namespace {
+
+// FollowInitialDetail looks for the initial surface within this many GSDs of the coarse
+// mesh: farther, the coarse mesh is not an approximation of it there (a hole, a cut).
+constexpr double kInitialDetailReachGsd = 4;
+
+// The median vertex's height sigma from the images (+inf, unseen, sorts last); NaN for no
+// vertex. The tests of LevelStartMesh and ChooseCoarseStart.
+double MedianVertexSigma(std::vector<float> sigma) {
+  if (sigma.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto middle = sigma.begin() + long(sigma.size() / 2);
+  std::nth_element(sigma.begin(), middle, sigma.end());
+  return *middle;
+}
+
+// AdaptiveStart: a DSM start remeshed at full resolution (no coarser level, grid_start 0)
+// gets triangles of flat_edge_px (resolved: ResolveFlatEdge; 4 pixels from two pairs on)
+// instead of coarse_edge_px where the initial surface is planar, and FollowInitialDetail
+// halves them DetailRounds times (to 1 pixel) where the initial surface departs from them:
+// a mesh whose resolution follows the surface, large on roofs and streets, fine at walls,
+// roof edges and small structures. The larger flat triangles average more pixels; the
+// walls keep the subdivision's 1-pixel triangles, so the crease pass (a second run of
+// level 0 on subdivided creases) is not needed (ResolveCreasePass). Tri-stereo 0.5 m seeds
+// 1-4, against the 2-pixel remesh with its crease pass (docs/benchmarks-history.md,
+// session 36): roofs 0.318 / 0.332 / 0.322 / 0.277 -> 0.309 / 0.308 / 0.287 / 0.262 m,
+// facades @0.5 m +0.6 to +1.2 points, F-score equal or better, 0.41M faces instead of
+// 0.67M, the job 2.1x faster. One pair keeps coarse_edge_px: on the real Pléiades pairs
+// the held-out views' pairs fell with it (img_03's mean 0.78795 -> 0.78550), and on
+// synthetic stereo its roofs were mixed (s1 0.347 -> 0.351 m, s2 0.356 -> 0.346 m).
+bool AdaptiveStart(const RefineOptions& options, bool initial_is_mesh, int level) {
+  return level == 0 && options.levels == 0 && !initial_is_mesh && options.grid_start == 0 &&
+         options.flat_edge_px > options.coarse_edge_px;
+}
+
+}  // namespace
+
+double LevelEdge(const RefineOptions& options, double gsd_m, int level) {
+  return options.coarse_edge_px * gsd_m * std::ldexp(1.0, level);
+}
+
+// `mesh` remeshed isotropically to the triangle edge of `level`, a DSM start's creases kept
+// (kDsmCreaseAngleDeg). With options.grid_start (resolved: ChooseCoarseStart): a DSM
+// start's own grid with cells of that edge (block means), else `mesh` as it is. (The
+// initial mesh's cells: InitialMeshCell. From the synthetic noisy DSM, 1-pixel cells at the
+// coarse level of a 0.3 m job refine roofs 8-13% worse than 2-pixel cells, equal to the
+// remesh's: docs/benchmarks-history.md, session 24.) edge_px > 0: the remesh's edge in
+// pixels instead of coarse_edge_px (AdaptiveStart).
+TriangleMesh RemeshForLevel(const RefineInput& input, TriangleMesh mesh,
+                            const RefineOptions& options, double gsd_m, int level,
+                            const Progress& progress, double grid_cell_m,
+                            double edge_px) {
+  if (options.grid_start > 0) {
+    if (input.initial_is_mesh || !input.initial_for_edge) return mesh;
+    return input.initial_for_edge(2 * LevelEdge(options, gsd_m, level));  // cells of one edge
+  }
+  const double level_edge_m = LevelEdge(options, gsd_m, level);
+  const double edge_m = GridKeepingTargetEdge(
+      edge_px > 0 ? level_edge_m * edge_px / options.coarse_edge_px : level_edge_m, grid_cell_m);
+  const double creases = input.initial_is_mesh ? 0 : kDsmCreaseAngleDeg;
+  return RemeshIsotropic(mesh, {.target_edge_m = edge_m, .crease_angle_deg = creases}, progress);
+}
+
+// The initial surface meshed for `level` (before remeshing): what a level below the
+// coarsest measures and, if it wins, restarts from.
+TriangleMesh InitialSurfaceAt(const RefineInput& input, const RefineOptions& options,
+                              double gsd_m, int level) {
+  if (!input.initial_for_edge) return input.initial_mesh;
+  return input.initial_for_edge(LevelEdge(options, gsd_m, level));
+}
+
+// The mesh a level starts from, made from the initial surface: remeshed to the level's
+// triangle edge (the coarsest level and a finer level of a carried start:
+// CarriesCoarseLevels). At full resolution (level 0) where the images do not
+// resolve the surface to initial_detail_gsd (the median vertex's height sigma from the
+// pairs, LevelHeightSigma, above it: a stereo or tri-stereo pass), that mesh is subdivided
+// where it cannot hold the initial surface's detail (FollowInitialDetail): the iterations
+// at one level do not win back what the 2-pixel mesh smooths away (synthetic 0.7 m stereo
+// and tri-stereo, F-score @0.5 m 2-3 points higher; multi-date views resolve it and lose
+// 1 point of facades with it; docs/benchmarks-history.md, session 18). median_sigma_m: that
+// median (NaN where the test did not run). AdaptiveStart: a DSM start's remesh at
+// flat_edge_px, subdivided DetailRounds times.
+TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& options,
+                            const std::vector<PreparedView>& views,
+                            const std::vector<std::pair<int, int>>& pairs, double gsd_m,
+                            const Progress& progress, int level, double* median_sigma_m,
+                            bool* adaptive_taken) {
+  if (median_sigma_m) *median_sigma_m = std::numeric_limits<double>::quiet_NaN();
+  if (adaptive_taken) *adaptive_taken = false;
+  const bool coarsest = level == options.levels;  // GridKeepingTargetEdge from two pairs on
+  const bool adaptive = AdaptiveStart(options, input.initial_is_mesh, level);
+  const double grid_cell_m = coarsest && pairs.size() > 1 ? input.initial_mesh_cell_m : 0;
+  TriangleMesh mesh = RemeshForLevel(
+      input, coarsest ? input.initial_mesh : InitialSurfaceAt(input, options, gsd_m, level),
+      options, gsd_m, level, progress, grid_cell_m, adaptive ? options.flat_edge_px : 0);
+  if (level != 0 || options.grid_start > 0 || !(options.initial_detail_gsd > 0))
+    return mesh;
+  const double tolerance_m = options.initial_detail_gsd * gsd_m;
+  const double median =
+      MedianVertexSigma(LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh));
+  if (median_sigma_m) *median_sigma_m = median;
+  if (!(median > tolerance_m)) {
+    spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex), within "
+                 "{:.2f} m: the coarse mesh is kept at {} pixels",
+                 std::isnan(median) ? 0.0 : median, tolerance_m, options.coarse_edge_px);
+    // they form the detail themselves, on the level's own triangles
+    if (adaptive)
+      mesh = RemeshForLevel(input, input.initial_mesh, options, gsd_m, level, progress, grid_cell_m);
+    return mesh;
+  }
+  if (adaptive_taken) *adaptive_taken = adaptive;
+  const RayScene initial(input.initial_mesh);  // after the test: a DSM mesh of millions of faces
+  const int rounds = adaptive ? DetailRounds(options.flat_edge_px, options.coarse_edge_px) : 1;
+  size_t subdivided = 0;
+  const size_t faces_before = mesh.num_faces();
+  for (int round = 0; round < rounds; ++round) {
+    size_t marked = 0;
+    mesh = FollowInitialDetail(mesh, initial, tolerance_m, kInitialDetailReachGsd * gsd_m, &marked);
+    subdivided += marked;
+    if (marked == 0) break;
+  }
+  SortSpatially(&mesh);
+  spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex): the "
+               "{}-pixel mesh's {} faces subdivided in {} round(s) where the initial surface "
+               "departs from them by more than {:.2f} m ({} marked; {} faces)",
+               median, adaptive ? options.flat_edge_px : options.coarse_edge_px, faces_before,
+               rounds, tolerance_m, subdivided, mesh.num_faces());
+  return mesh;
+}
+
+// Step 4a, RefineOptions::grid_start -1: the coarse start of a DSM start. The DSM's own
+// grid at the levels' triangle edge (with the umbrella weighted by 1 / edge length) where
+// the images resolve the median vertex's height at full resolution to initial_detail_gsd:
+// there the images form the walls the grid lacks, better than from the remesh's walls
+// (multi-date 0.5 m s1 / s2: facades 37.8 / 33.2 -> 48.8 / 38.9%, roofs 0.210 / 0.230 ->
+// 0.199 / 0.223 m; docs/benchmarks-history.md, session 25). Else (a stereo pair, a
+// tri-stereo: 0.4-1.0 GSD on the grid, against 0.03-0.17 GSD for multi-date sets) the
+// remesh, which keeps the DSM's walls: one pass does not form them (stereo 0.5 m s1
+// facades 24.2% from the remesh, 19.1% from the grid). One pair never takes the grid: the
+// two views of a pass see the walls of at most two sides, and on the real Pléiades pair
+// 01-03 (0.24 GSD on the grid, within the tolerance) the grid left the held-out view's
+// pairs' ZNCC 0.0017 / 0.0014 lower than the remesh. The test measures the level-0
+// grid through the initial check's pairs (InitialCheckPairs: a third of the jax set's 39
+// pairs: 1.8 s on its 300 m tile, 3.6-6.2 s a large-job tile). Returns 1 for the grid, 0
+// for the remesh; `grid`: that grid where it is the start of a job without coarser levels;
+// `grid_zncc`: where the grid is taken, its mean ZNCC over those pairs, which level 0's
+// initial-surface check compares with (the grid is what a restart there starts from).
+int ChooseCoarseStart(const RefineInput& input, const RefineOptions& options,
+                      const std::vector<PreparedView>& views,
+                      const std::vector<std::pair<int, int>>& pairs, double gsd_m,
+                      std::optional<TriangleMesh>* grid, double* grid_zncc) {
+  if (options.grid_start >= 0) return options.grid_start;
+  if (input.initial_is_mesh || !input.initial_for_edge || !(options.initial_detail_gsd > 0) ||
+      pairs.size() < 2)
+    return 0;
+  TriangleMesh mesh = input.initial_for_edge(2 * LevelEdge(options, gsd_m, 0));
+  LevelMeasure measure =
+      MeasureLevel(input, views, InitialCheckPairs(pairs, options), options, gsd_m, 0, mesh);
+  const double median = MedianVertexSigma(std::move(measure.height_sigma));
+  if (std::isnan(median)) return 0;
+  const double tolerance_m = options.initial_detail_gsd * gsd_m;
+  const bool resolves = median <= tolerance_m;
+  spdlog::info("refine: the images resolve the DSM's grid at full resolution to {:.2f} m "
+               "(median vertex, {}within {:.2f} m): the coarse mesh is {}",
+               median, resolves ? "" : "not ", tolerance_m,
+               resolves ? "the DSM's grid, the images form the walls"
+                        : "the DSM mesh remeshed, its walls kept");
+  if (resolves && options.levels == 0) *grid = std::move(mesh);
+  if (resolves && options.rasterize_hit_maps) *grid_zncc = measure.mean_zncc;  // as the check
+  return resolves ? 1 : 0;
+}
+
+double ResolveFlatEdge(const RefineOptions& options, bool initial_is_mesh, size_t num_pairs) {
+  if (options.flat_edge_px >= 0) return options.flat_edge_px;
+  const bool remeshed_dsm = options.levels == 0 && !initial_is_mesh && options.grid_start == 0;
+  return remeshed_dsm && num_pairs > 1 ? 2 * options.coarse_edge_px : options.coarse_edge_px;
+}
+
+int DetailRounds(double flat_edge_px, double coarse_edge_px) {
+  int rounds = 1;
+  for (double edge = flat_edge_px / 2; edge > 0.505 * coarse_edge_px; edge /= 2) ++rounds;
+  return rounds;
+}
+
+}  // namespace satmesh
