@@ -223,7 +223,8 @@ json TileResultToJson(const JobPlan& plan, const TileResult& t) {
   j["pairs"] = t.refine.pairs.size();
   j["pair_details"] = PairsToJson(t.refine.pair_details);  // views: indices into "views"
   j["candidate_pairs"] = t.refine.candidate_pairs;
-  j["coarse_start"] = t.refine.grid_start > 0 ? "grid" : "remesh";  // RefineOptions::grid_start
+  // RefineOptions::grid_start, flat_edge_px
+  j["coarse_start"] = t.refine.grid_start > 0 ? "grid" : t.refine.adaptive_start ? "adaptive" : "remesh";
   j["kept_initial_share"] = t.refine.kept_initial_share;  // keep_initial_sigmas's last step
   j["registration_m"] = {t.refine.registration_m.x(), t.refine.registration_m.y(),
                          t.refine.registration_m.z()};  // its shift to the initial's frame
@@ -269,7 +270,9 @@ TileResult TileResultFromJson(const JobPlan& plan, const json& j) {
   t.peak_rss_mb = j.value("peak_rss_mb", 0.0);
   t.refine.gsd_m = j.value("gsd_m", 0.0);
   t.refine.candidate_pairs = j.value("candidate_pairs", 0);
-  t.refine.grid_start = j.value("coarse_start", std::string("remesh")) == "grid" ? 1 : 0;
+  const std::string coarse_start = j.value("coarse_start", std::string("remesh"));
+  t.refine.grid_start = coarse_start == "grid" ? 1 : 0;
+  t.refine.adaptive_start = coarse_start == "adaptive";
   t.refine.kept_initial_share = j.value("kept_initial_share", 0.0);
   if (j.contains("registration_m") && j["registration_m"].size() == 3)
     for (int a = 0; a < 3; ++a) t.refine.registration_m[a] = j["registration_m"][a].get<double>();

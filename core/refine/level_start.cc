@@ -27,23 +27,23 @@ double MedianVertexSigma(std::vector<float> sigma) {
   return *middle;
 }
 
-// AdaptiveStart: a DSM start remeshed at full resolution (no coarser level, grid_start 0)
-// gets triangles of flat_edge_px (resolved: ResolveFlatEdge; 4 pixels from two pairs on)
-// instead of coarse_edge_px where the initial surface is planar, and FollowInitialDetail
-// halves them DetailRounds times (to 1 pixel) where the initial surface departs from them:
-// a mesh whose resolution follows the surface, large on roofs and streets, fine at walls,
-// roof edges and small structures. The larger flat triangles average more pixels; the
-// walls keep the subdivision's 1-pixel triangles, so the crease pass (a second run of
-// level 0 on subdivided creases) is not needed (ResolveCreasePass). Tri-stereo 0.5 m seeds
-// 1-4, against the 2-pixel remesh with its crease pass (docs/benchmarks-history.md,
-// session 36): roofs 0.318 / 0.332 / 0.322 / 0.277 -> 0.309 / 0.308 / 0.287 / 0.262 m,
-// facades @0.5 m +0.6 to +1.2 points, F-score equal or better, 0.41M faces instead of
-// 0.67M, the job 2.1x faster. One pair keeps coarse_edge_px: on the real Pléiades pairs
-// the held-out views' pairs fell with it (img_03's mean 0.78795 -> 0.78550), and on
+// AdaptiveStart: a DSM start remeshed at full resolution (no coarser level, grid_start 0,
+// initial_detail_gsd on) gets triangles of flat_edge_px (resolved: ResolveFlatEdge; 4
+// pixels from two pairs on) instead of coarse_edge_px where the initial surface is planar,
+// and FollowInitialDetail halves them DetailRounds times (to 1 pixel) where the initial
+// surface departs from them: a mesh whose resolution follows the surface, large on roofs,
+// streets and planar walls, fine at roof edges, wall feet and small structures. The larger
+// flat triangles average more pixels; the creases get 1-2 pixel triangles from the start,
+// so the crease pass (a second run of level 0 on subdivided creases) does not follow
+// (ResolveCreasePass). Tri-stereo 0.5 m seeds 1-4, against the 2-pixel remesh with its
+// crease pass (docs/benchmarks-history.md, session 36): roofs 0.318 / 0.332 / 0.322 / 0.277
+// -> 0.310 / 0.308 / 0.287 / 0.262 m, facades @0.5 m +0.2 to +1.2 points, F -0.1 to +0.3,
+// 0.6x the faces, the job 2.1x faster. One pair keeps coarse_edge_px: on the real Pléiades
+// pairs the held-out views' pairs fell with it (img_03's mean 0.78795 -> 0.78550), and on
 // synthetic stereo its roofs were mixed (s1 0.347 -> 0.351 m, s2 0.356 -> 0.346 m).
 bool AdaptiveStart(const RefineOptions& options, bool initial_is_mesh, int level) {
   return level == 0 && options.levels == 0 && !initial_is_mesh && options.grid_start == 0 &&
-         options.flat_edge_px > options.coarse_edge_px;
+         options.initial_detail_gsd > 0 && options.flat_edge_px > options.coarse_edge_px;
 }
 
 }  // namespace

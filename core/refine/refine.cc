@@ -358,6 +358,7 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
   if (options.levels == 0 && !level0_start)
     level0_start = LevelStartMesh(input, options, views, result.pairs, result.gsd_m, progress, 0,
                                   nullptr, &adaptive_start);
+  result.adaptive_start = adaptive_start;
   options.crease_pass =
       ResolveCreasePass(options, input.initial_is_mesh, result.pairs.size(), adaptive_start);
   CoarseToFine(input, options, progress, views, &result, std::move(level0_start),

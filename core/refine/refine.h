@@ -82,6 +82,8 @@ struct RefineResult {
   double gsd_m = 0;                    // full-resolution GSD
   int grid_start = 0;                  // the coarse start taken (RefineOptions::grid_start
                                        // resolved: 1 the DSM's grid, 0 the remesh)
+  bool adaptive_start = false;         // level 0 started from the adaptive remesh
+                                       // (RefineOptions::flat_edge_px; level_start.h)
   // The mean share of the vertices' offsets from the initial surface undone by the last
   // step (RefineOptions::keep_initial_sigmas; 0: off or nothing undone).
   double kept_initial_share = 0;

@@ -86,7 +86,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "height to worse than this many GSDs: faces of the coarse mesh the initial surface "
        "departs from by more than that are subdivided, their new vertices put on it; 0: off"},
       {"flat_edge_px", &R::flat_edge_px, Range::In(-1, 16),
-       "a DSM start remeshed at full resolution (no coarser level, grid_start 0): its "
+       "a DSM start remeshed at full resolution (no coarser level, grid_start 0, "
+       "initial_detail_gsd > 0): its "
        "triangles' edge in pixels where the initial surface is planar, halved where the "
        "initial surface departs from them by more than initial_detail_gsd, down to half of "
        "coarse_edge_px; at most coarse_edge_px: off; -1: 2 x coarse_edge_px with more than "

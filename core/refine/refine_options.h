@@ -88,10 +88,11 @@ struct RefineOptions {
                                      // subdivided, their new vertices put on it
                                      // (refine.cc, LevelStartMesh); 0: off
   double flat_edge_px = -1;        // a DSM start remeshed at full resolution (no coarser
-                                   // level, grid_start 0): its triangles' edge in pixels
-                                   // where the initial surface is planar, halved where the
-                                   // initial surface departs from them by more than
-                                   // initial_detail_gsd down to half of coarse_edge_px (a mesh
+                                   // level, grid_start 0, initial_detail_gsd > 0): its
+                                   // triangles' edge in pixels where the initial surface is
+                                   // planar, halved where the initial surface departs from
+                                   // them by more than initial_detail_gsd down to half of
+                                   // coarse_edge_px (a mesh
                                    // whose resolution follows the surface; level_start.cc,
                                    // AdaptiveStart); at most coarse_edge_px: off; -1: 2 x
                                    // coarse_edge_px with more than one pair, else off

@@ -94,6 +94,8 @@ TEST(AdaptiveStart, FewerFacesLargerWherePlanarAndAsAccurate) {
   const RefineResult& a = adaptive.tiles[0].refine;
   const RefineResult& u = uniform.tiles[0].refine;
   ASSERT_EQ(a.grid_start, 0);  // the remesh: a tri-stereo does not resolve the DSM's grid
+  EXPECT_TRUE(a.adaptive_start);
+  EXPECT_FALSE(u.adaptive_start);
   ASSERT_EQ(a.levels.size(), 1u);  // no crease pass: the walls' triangles are fine already
   ASSERT_EQ(u.levels.size(), 2u);
   EXPECT_TRUE(u.levels[1].crease_pass);

@@ -189,7 +189,8 @@ TEST_F(TiledJob, AFailingTileIsReportedAndTheOthersFinish) {
       EXPECT_EQ(t.error_code, ErrorCode::kInvalidInput) << t.name;
     } else {  // the coarse start the tile took (grid_start -1: the grid or the remesh)
       EXPECT_EQ(t.refine.grid_start, o.tiles[i].refine.grid_start) << t.name;
-      EXPECT_EQ(metrics["tiles"][i]["coarse_start"], t.refine.grid_start ? "grid" : "remesh");
+      EXPECT_EQ(metrics["tiles"][i]["coarse_start"],
+                t.refine.grid_start ? "grid" : t.refine.adaptive_start ? "adaptive" : "remesh");
     }
   }
   // The pipeline's assembly step from the restored results (what the server and the
