@@ -27,6 +27,12 @@ double MedianVertexSigma(std::vector<float> sigma) {
   return *middle;
 }
 
+// A DSM start remeshed at full resolution: no coarser level, grid_start (resolved) 0. The
+// one place that says where the adaptive start may apply (AdaptiveStart, ResolveFlatEdge).
+bool RemeshedDsmAtFullResolution(const RefineOptions& options, bool initial_is_mesh) {
+  return options.levels == 0 && !initial_is_mesh && options.grid_start == 0;
+}
+
 // AdaptiveStart: a DSM start remeshed at full resolution (no coarser level, grid_start 0,
 // initial_detail_gsd on) gets triangles of flat_edge_px (resolved: ResolveFlatEdge; 4
 // pixels from two pairs on) instead of coarse_edge_px where the initial surface is planar,
@@ -42,7 +48,7 @@ double MedianVertexSigma(std::vector<float> sigma) {
 // pairs the held-out views' pairs fell with it (img_03's mean 0.78795 -> 0.78550), and on
 // synthetic stereo its roofs were mixed (s1 0.347 -> 0.351 m, s2 0.356 -> 0.346 m).
 bool AdaptiveStart(const RefineOptions& options, bool initial_is_mesh, int level) {
-  return level == 0 && options.levels == 0 && !initial_is_mesh && options.grid_start == 0 &&
+  return level == 0 && RemeshedDsmAtFullResolution(options, initial_is_mesh) &&
          options.initial_detail_gsd > 0 && options.flat_edge_px > options.coarse_edge_px;
 }
 
@@ -185,8 +191,9 @@ int ChooseCoarseStart(const RefineInput& input, const RefineOptions& options,
 
 double ResolveFlatEdge(const RefineOptions& options, bool initial_is_mesh, size_t num_pairs) {
   if (options.flat_edge_px >= 0) return options.flat_edge_px;
-  const bool remeshed_dsm = options.levels == 0 && !initial_is_mesh && options.grid_start == 0;
-  return remeshed_dsm && num_pairs > 1 ? 2 * options.coarse_edge_px : options.coarse_edge_px;
+  return RemeshedDsmAtFullResolution(options, initial_is_mesh) && num_pairs > 1
+             ? 2 * options.coarse_edge_px
+             : options.coarse_edge_px;
 }
 
 int DetailRounds(double flat_edge_px, double coarse_edge_px) {

@@ -32,16 +32,15 @@ TriangleMesh DsmMeshInFrame(const Dsm& dsm, int factor, const LocalFrame& frame)
 
 }  // namespace
 
-TriangleMesh MeshInFrame(const TriangleMesh& mesh, const std::string& crs, const LocalFrame& frame) {
+TriangleMesh MeshInFrame(TriangleMesh mesh, const std::string& crs, const LocalFrame& frame) {
   std::vector<Eigen::Vector3d> points(mesh.vertices.size());
   for (size_t i = 0; i < points.size(); ++i) points[i] = mesh.AbsoluteVertex(i);
   CrsTransform(crs, kWgs84Geographic3D).Apply(&points);
-  TriangleMesh out = mesh;
-  out.origin.setZero();
-  out.crs.clear();
+  mesh.origin.setZero();
+  mesh.crs.clear();
   for (size_t i = 0; i < points.size(); ++i)
-    out.vertices[i] = frame.LocalFromGeo(points[i]).cast<float>();
-  return out;
+    mesh.vertices[i] = frame.LocalFromGeo(points[i]).cast<float>();
+  return mesh;
 }
 
 PixelWindow ImageWindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vector3d>& box_geo,

@@ -39,7 +39,9 @@ PixelWindow ImageWindowSeeing(const RpcModel& rpc, const std::vector<Eigen::Vect
 int TileWindowMarginPx(const RefineOptions& options, double cell_m, bool initial_is_mesh);
 
 // A mesh whose absolute vertices are in `crs` (origin added), in `frame` (no origin, no CRS).
-TriangleMesh MeshInFrame(const TriangleMesh& mesh, const std::string& crs, const LocalFrame& frame);
+// Taken by value: a temporary (a tile's DSM mesh) is moved in, not copied. `crs` must not
+// be the moved mesh's own string.
+TriangleMesh MeshInFrame(TriangleMesh mesh, const std::string& crs, const LocalFrame& frame);
 
 // Downsamples a DSM by an integer factor (NaN-aware block mean; a block with no valid
 // cell stays NaN).
