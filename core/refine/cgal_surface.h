@@ -74,8 +74,11 @@ class ClosestTriangle {
 // back on after they moved (as CGAL's remeshing projects them).
 class SurfaceProjector {
  public:
-  explicit SurfaceProjector(const SurfaceMesh& sm) {
-    for (auto f : sm.faces()) {
+  explicit SurfaceProjector(const SurfaceMesh& sm) : SurfaceProjector(sm, sm.faces()) {}
+  // Only `faces` of sm: the surface near the vertices that will be put back on it.
+  template <typename FaceRange>
+  SurfaceProjector(const SurfaceMesh& sm, const FaceRange& faces) {
+    for (auto f : faces) {
       std::array<Kernel::Point_3, 3> q;
       int k = 0;
       for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) q[k++] = sm.point(v);
