@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "core/common/stage_time.h"
+#include "core/common/threads.h"
 #include "core/dsm/dsm.h"
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
@@ -235,22 +236,28 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
                            local.faces, local.height_sigma};
     fs::create_directories(fs::path(out_dir) / "tiles");
 
-    // The whole refined (padded) tile as a DSM: assembly takes its core cells, seams
-    // compare neighbours' overlaps.
-    const Dsm grid = TileGrid(plan, tile.padded_cells);
-    const Dsm padded_dsm = DsmFromMesh(ToTriangleMesh(padded, plan.dsm.crs_wkt), grid);
-    WriteAtomically(fs::path(out_dir) / TileDsmPath(tile), [&](const std::string& p) { WriteDsm(p, padded_dsm); });
-    if (!local.height_sigma.empty()) {
-      const Dsm confidence = ConfidenceFromHeightSigma(
-          HeightSigmaFromMesh(ToTriangleMesh(padded, plan.dsm.crs_wkt), grid), r.refine.gsd_m);
+    // The whole refined (padded) tile as a DSM (assembly takes its core cells, seams compare
+    // neighbours' overlaps) and its confidence, on a thread of their own while this one
+    // clips the piece and encodes it (Draco): the write's longer half (stereo 0.5 m s1: the
+    // rasters 0.4 s, the piece 0.8 s).
+    const auto write_rasters = [&] {
+      const TriangleMesh padded_mesh = ToTriangleMesh(padded, plan.dsm.crs_wkt);
+      const Dsm grid = TileGrid(plan, tile.padded_cells);
+      const Dsm padded_dsm = DsmFromMesh(padded_mesh, grid);
+      WriteAtomically(fs::path(out_dir) / TileDsmPath(tile), [&](const std::string& p) { WriteDsm(p, padded_dsm); });
+      if (local.height_sigma.empty()) return;
+      const Dsm confidence =
+          ConfidenceFromHeightSigma(HeightSigmaFromMesh(padded_mesh, grid), r.refine.gsd_m);
       WriteAtomically(fs::path(out_dir) / TileConfidencePath(tile),
                       [&](const std::string& p) { WriteDsm(p, confidence); });
-    }
-
-    const PointMesh piece = ClipToBox(padded, tile.core, PieceCleanOptions(padded, tile.core));
-    SATMESH_CHECK(!piece.faces.empty(), ErrorCode::kInvalidInput,
-                  "tile " + tile.Name() + ": no refined surface inside the tile's core");
-    WritePiece(piece, tile, plan, input.initial_heights, out_dir, &r);
+    };
+    const auto write_piece = [&] {
+      const PointMesh piece = ClipToBox(padded, tile.core, PieceCleanOptions(padded, tile.core));
+      SATMESH_CHECK(!piece.faces.empty(), ErrorCode::kInvalidInput,
+                    "tile " + tile.Name() + ": no refined surface inside the tile's core");
+      WritePiece(piece, tile, plan, input.initial_heights, out_dir, &r);
+    };
+    RunAlongside(write_rasters, write_piece);
     r.write_s = SecondsSince(t0);
     if (!keep_mesh) r.refine.mesh = TriangleMesh{};
     r.ok = true;
