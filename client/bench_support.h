@@ -48,7 +48,6 @@ struct MachineInfo {
   double load_1m = 0, load_5m = 0, load_15m = 0;
 };
 MachineInfo ReadMachineInfo();
-double PeakRssMib();  // getrusage(RUSAGE_SELF).ru_maxrss
 // User + system CPU seconds of this process so far (all threads): under a shared, loaded
 // machine this is steadier than wall time.
 double CpuSeconds();

@@ -14,6 +14,7 @@
 #include "client/bench_support.h"
 #include "client/command.h"
 #include "client/refine_runner.h"
+#include "core/common/memory.h"
 #include "core/synth/scene_writer.h"
 #include "core/tiling/tile_input.h"
 #include "core/tiling/tile_plan.h"
@@ -158,7 +159,7 @@ int RunBench(const std::vector<std::string>& argv) {
   for (const auto& [name, seconds] : JobStages(outputs)) stages.push_back({{"stage", name}, {"s", seconds}});
   report["stages"] = stages;
   report["total_s"] = outputs.total_s;
-  report["peak_rss_mib"] = PeakRssMib();
+  report["peak_rss_mib"] = PeakRssMb();
   if (refine.levels.empty()) {  // a tiled job: no one tile's levels to time Embree against
     std::printf("(a tiled job: per-level iteration times and Embree alone are reported for "
                 "one-tile jobs; run one tile with --set aoi=... for them)\n");
@@ -208,7 +209,7 @@ int RunBench(const std::vector<std::string>& argv) {
   std::printf("pairs %zu; prepare %.1f s, refine %.1f s, write %.1f s, run %.1f s (CPU %.1f s = "
               "%.2f cores); total %.1f s; peak RSS %.0f MiB; load average %.2f %.2f %.2f\n",
               refine.pairs.size(), outputs.prepare_s, refine.total_s, outputs.write_s, run_s,
-              run_cpu_s, run_cpu_s / std::max(1e-9, run_s), total_s, PeakRssMib(), after.load_1m,
+              run_cpu_s, run_cpu_s / std::max(1e-9, run_s), total_s, PeakRssMb(), after.load_1m,
               after.load_5m, after.load_15m);
 
   if (args.Has("json")) {
@@ -248,7 +249,7 @@ int RunBench(const std::vector<std::string>& argv) {
     report["run_cpu_s"] = run_cpu_s;
     report["run_s"] = run_s;
     report["total_s"] = total_s;
-    report["peak_rss_mib"] = PeakRssMib();
+    report["peak_rss_mib"] = PeakRssMb();
     report["machine_after"] = MachineJson(after);
     std::ofstream(args.Require("json")) << report.dump(2) << "\n";
     std::printf("wrote %s\n", args.Require("json").c_str());

@@ -48,22 +48,31 @@ std::vector<char> FacesToSubdivide(const TriangleMesh& mesh, double tolerance_m)
 std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eigen::Vector3f>& points,
                                  const std::vector<Eigen::Vector3f>& directions, double reach_m) {
   const size_t n = points.size();
-  std::vector<Ray> rays(2 * n);
-  for (size_t i = 0; i < n; ++i)
-    for (int s = 0; s < 2; ++s) {
-      Ray& r = rays[2 * i + s];
-      r.origin = points[i];
-      r.direction = s == 0 ? directions[i] : Eigen::Vector3f(-directions[i]);
-      r.t_near = 0.f;
-      r.t_far = directions[i].squaredNorm() > 0 ? float(reach_m) : 0.f;  // no direction: no hit
-    }
-  std::vector<RayHit> hits(2 * n);
-  surface.Intersect(rays.data(), hits.data(), rays.size());
   std::vector<float> distance(n, std::numeric_limits<float>::quiet_NaN());
-  for (size_t i = 0; i < n; ++i) {
-    const RayHit &up = hits[2 * i], &down = hits[2 * i + 1];
-    if (up.hit() && (!down.hit() || up.t <= down.t)) distance[i] = up.t;
-    else if (down.hit()) distance[i] = -down.t;
+  // The rays in chunks: a 0.5 m stereo tile's start measures 2.3M points (52 bytes of ray
+  // and hit each way), which all at once made the job's peak (469 MB, +130 MB over the
+  // level's iterations).
+  constexpr size_t kChunk = size_t(1) << 16;
+  std::vector<Ray> rays(2 * std::min(n, kChunk));
+  std::vector<RayHit> hits(rays.size());
+  for (size_t first = 0; first < n; first += kChunk) {
+    const size_t count = std::min(kChunk, n - first);
+    for (size_t j = 0; j < count; ++j) {
+      const size_t i = first + j;
+      for (int s = 0; s < 2; ++s) {
+        Ray& r = rays[2 * j + s];
+        r.origin = points[i];
+        r.direction = s == 0 ? directions[i] : Eigen::Vector3f(-directions[i]);
+        r.t_near = 0.f;
+        r.t_far = directions[i].squaredNorm() > 0 ? float(reach_m) : 0.f;  // no direction: no hit
+      }
+    }
+    surface.Intersect(rays.data(), hits.data(), 2 * count);
+    for (size_t j = 0; j < count; ++j) {
+      const RayHit &up = hits[2 * j], &down = hits[2 * j + 1];
+      if (up.hit() && (!down.hit() || up.t <= down.t)) distance[first + j] = up.t;
+      else if (down.hit()) distance[first + j] = -down.t;
+    }
   }
   return distance;
 }

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "core/common/error.h"
+#include "core/common/memory.h"
 #include "core/common/stage_time.h"
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
@@ -203,6 +204,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
     }
     LevelStats stats;
     bool restarted = false;
+    ReturnFreedMemory();  // the start's remeshing and tests: the level's peak is its own
     if (!RefineLevel(ctx, level, initial_zncc + kKeepMargin, &mesh, &stats)) {
       spdlog::info("level {}: the previous level's mean ZNCC {:.4f} does not beat the "
                    "initial surface's {:.4f} by {} (over {} of {} pairs); restarting from the "

@@ -1,7 +1,6 @@
 #include "core/tiling/job.h"
 
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
 
 #include <algorithm>
 #include <atomic>
@@ -11,6 +10,7 @@
 #include <thread>
 
 #include "core/common/error.h"
+#include "core/common/memory.h"
 #include "core/common/stage_time.h"
 #include "core/common/threads.h"
 #include "core/refine/bias_estimation.h"
@@ -239,9 +239,7 @@ JobOutputs RunJob(const JobSpec& spec, const std::string& out_dir, const Progres
     out.refine = out.tiles[0].refine;
     out.view_names = out.tiles[0].view_names;
   }
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  out.peak_rss_mb = usage.ru_maxrss / 1024.0;
+  out.peak_rss_mb = PeakRssMb();
   out.total_s = SecondsSince(t_start);
   progress.Report(1.0, "done");
   return out;

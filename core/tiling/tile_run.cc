@@ -1,7 +1,6 @@
 #include "core/tiling/tile_run.h"
 
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +8,8 @@
 #include <map>
 #include <numbers>
 
+#include "core/common/memory.h"
 #include "core/common/stage_time.h"
-#include "core/common/threads.h"
 #include "core/dsm/dsm.h"
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
@@ -68,12 +67,6 @@ Eigen::Matrix3d EcefFromEnu(const Eigen::Vector3d& center_lon_lat_h) {
   r.col(1) << -std::sin(lat) * std::cos(lon), -std::sin(lat) * std::sin(lon), std::cos(lat);
   r.col(2) << std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat);
   return r;
-}
-
-double PeakRssMb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return usage.ru_maxrss / 1024.0;  // Linux: kilobytes
 }
 
 // Bilinear height of `dsm` at (x, y) in its CRS from the valid ones of the 4 nearest cell
@@ -227,6 +220,7 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
     r.view_bias_px = r.refine.view_bias_px;
     r.bias_s = r.refine.bias_s;
     r.refine_s = SecondsSince(t0);
+    ReturnFreedMemory();
 
     t0 = StageClock::now();
     const TriangleMesh& local = r.refine.mesh;
@@ -236,29 +230,27 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
                            local.faces, local.height_sigma};
     fs::create_directories(fs::path(out_dir) / "tiles");
 
-    // The whole refined (padded) tile as a DSM (assembly takes its core cells, seams compare
-    // neighbours' overlaps) and its confidence, on a thread of their own while this one
-    // clips the piece and encodes it (Draco): the write's longer half (stereo 0.5 m s1: the
-    // rasters 0.4 s, the piece 0.8 s). Tri-stereo 0.5 m s1: the write 0.53 -> 0.41 s, the
-    // process's peak 309 -> 327-371 MB (both rasters' ray scenes beside the encoder).
-    const auto write_rasters = [&] {
+    // The whole refined (padded) tile as a DSM: assembly takes its core cells, seams
+    // compare neighbours' overlaps. (The rasters on a thread of their own beside the
+    // piece's encoding saved 0.12 s of stereo 0.5 m s1's 6.7 s for 57 MB more at the peak,
+    // 348 -> 405 MB: not kept; docs/benchmarks-history.md, session 37.)
+    const Dsm grid = TileGrid(plan, tile.padded_cells);
+    {
       const TriangleMesh padded_mesh = ToTriangleMesh(padded, plan.dsm.crs_wkt);
-      const Dsm grid = TileGrid(plan, tile.padded_cells);
       const Dsm padded_dsm = DsmFromMesh(padded_mesh, grid);
       WriteAtomically(fs::path(out_dir) / TileDsmPath(tile), [&](const std::string& p) { WriteDsm(p, padded_dsm); });
-      if (local.height_sigma.empty()) return;
-      const Dsm confidence =
-          ConfidenceFromHeightSigma(HeightSigmaFromMesh(padded_mesh, grid), r.refine.gsd_m);
-      WriteAtomically(fs::path(out_dir) / TileConfidencePath(tile),
-                      [&](const std::string& p) { WriteDsm(p, confidence); });
-    };
-    const auto write_piece = [&] {
-      const PointMesh piece = ClipToBox(padded, tile.core, PieceCleanOptions(padded, tile.core));
-      SATMESH_CHECK(!piece.faces.empty(), ErrorCode::kInvalidInput,
-                    "tile " + tile.Name() + ": no refined surface inside the tile's core");
-      WritePiece(piece, tile, plan, input.initial_heights, out_dir, &r);
-    };
-    RunAlongside(write_rasters, write_piece);
+      if (!local.height_sigma.empty()) {
+        const Dsm confidence =
+            ConfidenceFromHeightSigma(HeightSigmaFromMesh(padded_mesh, grid), r.refine.gsd_m);
+        WriteAtomically(fs::path(out_dir) / TileConfidencePath(tile),
+                        [&](const std::string& p) { WriteDsm(p, confidence); });
+      }
+    }
+
+    const PointMesh piece = ClipToBox(padded, tile.core, PieceCleanOptions(padded, tile.core));
+    SATMESH_CHECK(!piece.faces.empty(), ErrorCode::kInvalidInput,
+                  "tile " + tile.Name() + ": no refined surface inside the tile's core");
+    WritePiece(piece, tile, plan, input.initial_heights, out_dir, &r);
     r.write_s = SecondsSince(t0);
     if (!keep_mesh) r.refine.mesh = TriangleMesh{};
     r.ok = true;
