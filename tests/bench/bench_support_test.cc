@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/common/error.h"
+#include "core/common/memory.h"
 
 namespace satmesh::cli {
 namespace {
@@ -69,7 +70,7 @@ TEST(ReadMachineInfo, DescribesThisMachine) {
   EXPECT_GT(info.num_cpus, 0);
   EXPECT_GT(info.mem_total_gib, 0.0);
   EXPECT_GE(info.load_1m, 0.0);
-  EXPECT_GT(PeakRssMib(), 0.0);
+  EXPECT_GT(PeakRssMb(), 0.0);
   EXPECT_GE(CpuSeconds(), 0.0);
 }
 
