@@ -12,7 +12,9 @@ struct MeshWriteOptions {
   bool ply_binary = true;          // PLY: binary little endian (else ASCII)
   bool ply_double = true;          // PLY: vertex x,y,z as double (origin added)
   int draco_position_bits = 16;    // Draco/glb position quantisation, in [8, 30]
-  int draco_speed = 6;             // Draco encoder speed, in [0, 10] (0 = best ratio)
+  // Draco encoder speed, in [0, 10] (0 = best ratio). 6 encodes a stereo 0.5 m tile's glb
+  // in 0.24 s against 5's 0.32 s at the same size (2.47 MB); 7 is 0.5% larger, 8 11%.
+  int draco_speed = 6;
   // glb normals and per-vertex scalars: gltf-pipeline's defaults (8 and 12 bits); a tile
   // of 33.8k vertices: 129 KB positions only, 247 KB with normals, _HEIGHT and _CHANGE.
   int draco_normal_bits = 8;       // glb normals' quantisation (octahedral), in [6, 16]

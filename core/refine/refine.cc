@@ -113,6 +113,7 @@ void CreasePass(const LevelContext& ctx, TriangleMesh* mesh, RefineResult* resul
                "neighbours' plane by more than {:.2f} m ({} faces)",
                subdivided, faces_before, tolerance_m, mesh->num_faces());
   LevelStats stats;
+  ReturnFreedMemory();  // level 0's workspaces: the pass's peak is its own
   RefineLevel(ctx, 0, std::numeric_limits<double>::quiet_NaN(), mesh, &stats);
   stats.crease_pass = true;
   result->levels.push_back(std::move(stats));
