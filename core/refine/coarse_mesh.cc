@@ -73,7 +73,7 @@ TriangleMesh FromSurfaceMesh(const SurfaceMesh& sm, const TriangleMesh& like) {
   TriangleMesh out;
   out.origin = like.origin;
   out.crs = like.crs;
-  std::unordered_map<uint32_t, int> index;
+  std::vector<int> index(sm.num_vertices(), -1);  // by CGAL's index (removed ones too)
   out.vertices.reserve(sm.number_of_vertices());
   for (auto v : sm.vertices()) {
     const auto& p = sm.point(v);
@@ -291,16 +291,16 @@ SurfaceMesh RemeshWhole(const TriangleMesh& mesh, const CoarseMeshOptions& optio
 // results.
 SurfaceMesh StitchBlocks(const TriangleMesh& mesh, std::vector<BlockResult>* results) {
   SurfaceMesh sm;
-  std::unordered_map<int, SurfaceMesh::Vertex_index> shared;
+  std::vector<SurfaceMesh::Vertex_index> shared(mesh.vertices.size());  // null: not added yet
   auto seed = sm.add_property_map<SurfaceMesh::Vertex_index, bool>("v:seed", false).first;
   auto shared_vertex = [&](int i) {
-    auto [it, added] = shared.try_emplace(i);
-    if (added) {
+    SurfaceMesh::Vertex_index& v = shared[size_t(i)];
+    if (v == SurfaceMesh::null_vertex()) {
       const auto& p = mesh.vertices[i];
-      it->second = sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
-      seed[it->second] = true;
+      v = sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
+      seed[v] = true;
     }
-    return it->second;
+    return v;
   };
   size_t dropped = 0;
   for (BlockResult& r : *results) {
