@@ -34,7 +34,7 @@ std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eige
                                  const std::vector<Eigen::Vector3f>& directions, double reach_m);
 
 // The coarse mesh refined where it cannot hold the initial surface's detail (used by
-// refine.cc's LevelStartMesh, which says when): faces from which `surface` (the initial
+// level_start.cc's LevelStartMesh, which says when): faces from which `surface` (the initial
 // surface's Embree scene) departs by more than tolerance_m along the face's normal, at the
 // face's edge midpoints or centroid (measured within reach_m), are subdivided
 // (SubdivideMarked), and the new vertices are put on the surface along their normals.

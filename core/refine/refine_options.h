@@ -86,16 +86,16 @@ struct RefineOptions {
                                      // than this many GSDs: faces of the coarse mesh the
                                      // initial surface departs from by more than that are
                                      // subdivided, their new vertices put on it
-                                     // (refine.cc, LevelStartMesh); 0: off
+                                     // (level_start.cc, LevelStartMesh); 0: off
   double flat_edge_px = -1;        // a DSM start remeshed at full resolution (no coarser
                                    // level, grid_start 0, initial_detail_gsd > 0): its
                                    // triangles' edge in pixels where the initial surface is
                                    // planar, halved where the initial surface departs from
                                    // them by more than initial_detail_gsd down to half of
-                                   // coarse_edge_px (a mesh
-                                   // whose resolution follows the surface; level_start.cc,
-                                   // AdaptiveStart); at most coarse_edge_px: off; -1: 2 x
-                                   // coarse_edge_px with more than one pair, else off
+                                   // coarse_edge_px (a mesh whose resolution follows the
+                                   // surface; level_start.cc, AdaptiveStart); at most
+                                   // coarse_edge_px: off; -1: 2 x coarse_edge_px with more
+                                   // than one pair, else off
   int grid_start = -1;             // the coarse mesh of a DSM start: 1: the DSM's own grid
                                    // at the level's triangle edge, the thin plate's
                                    // umbrella weighing each neighbour by 1 / edge length
@@ -106,7 +106,7 @@ struct RefineOptions {
                                    // -1: the grid where the images resolve the median
                                    // vertex's height at full resolution to
                                    // initial_detail_gsd (multi-date sets), else the remesh
-                                   // (stereo, tri-stereo; refine.cc, ChooseCoarseStart)
+                                   // (stereo, tri-stereo; level_start.cc, ChooseCoarseStart)
   int crease_pass = -1;            // after the full-resolution level, the faces near its
                                    // creases (a vertex off its neighbours' plane by more
                                    // than flat_tolerance_gsd) are subdivided and the level
