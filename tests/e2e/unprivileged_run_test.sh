@@ -85,9 +85,13 @@ done
 ls "$work/scene/cli-out/tiles/"*.glb >/dev/null 2>&1 || fail "satmesh refine wrote no tiles/*.glb"
 echo "unprivileged_run_test: CLI refine OK ($((SECONDS - t0)) s)"
 
-# 2. The server, on a free loopback port.
+# 2. The server, on a free loopback port below the kernel's ephemeral range: a port in that
+# range can be taken between the probe and the server's bind by the local end of another
+# test's connection (ctest -j2; CI once failed "cannot listen on 127.0.0.1:38904").
 port=""
-for p in $(shuf -i 20000-60000 -n 20); do
+ephemeral_low=$(cut -f1 /proc/sys/net/ipv4/ip_local_port_range 2>/dev/null || echo 32768)
+[ "$ephemeral_low" -gt 21000 ] 2>/dev/null || ephemeral_low=32768  # an unusual range: Linux's default
+for p in $(shuf -i 20000-$((ephemeral_low - 1)) -n 20); do
   (exec 3<>"/dev/tcp/127.0.0.1/$p") 2>/dev/null || { port=$p; break; }
 done
 [ -n "$port" ] || fail "no free loopback port found"
