@@ -62,7 +62,11 @@ if ! command -v python3 >/dev/null; then
   echo "note: no python3 for a static file server: the static page is not checked"
   exit 0
 fi
-http_port=$(( 20000 + RANDOM % 20000 ))
+# A port below the kernel's ephemeral range, which the local ends of other tests'
+# connections take from (ctest -j2): as e2e_unprivileged_run picks its server's.
+ephemeral_low=$(cut -f1 /proc/sys/net/ipv4/ip_local_port_range 2>/dev/null || echo 32768)
+[ "$ephemeral_low" -gt 21000 ] 2>/dev/null || ephemeral_low=32768  # an unusual range: Linux's default
+http_port=$(( 20000 + RANDOM % (ephemeral_low - 20000) ))
 python3 -m http.server "$http_port" --bind 127.0.0.1 --directory "$work/out" >"$work/http.log" 2>&1 &
 http_pid=$!
 for _ in $(seq 50); do python3 -c "import urllib.request as u; u.urlopen('http://127.0.0.1:$http_port/tileset.json')" 2>/dev/null && break; sleep 0.1; done
