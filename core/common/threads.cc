@@ -12,4 +12,9 @@ int ShareProcessorsAmongWorkers(int workers) {
   return threads;
 }
 
+bool OnePerThread(size_t items) {
+  const size_t threads = size_t(std::max(1, omp_get_max_threads()));
+  return items >= threads && (items % threads == 0 || items >= 4 * threads);
+}
+
 }  // namespace satmesh

@@ -71,7 +71,8 @@ VertexAdjacency BuildVertexAdjacency(const TriangleMesh& mesh) {
 
 std::vector<Eigen::Vector3f> FaceNormals(const TriangleMesh& mesh) {
   std::vector<Eigen::Vector3f> normals(mesh.faces.size());
-  for (size_t i = 0; i < mesh.faces.size(); ++i) {
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < long(mesh.faces.size()); ++i) {
     const Eigen::Vector3d n = AreaVector2(mesh, mesh.faces[i]);
     const double len = n.norm();
     normals[i] = len > 0 ? Eigen::Vector3f((n / len).cast<float>()) : Eigen::Vector3f::Zero();

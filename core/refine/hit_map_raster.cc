@@ -1,3 +1,4 @@
+#include "core/common/threads.h"
 #include "core/refine/hit_map_raster.h"
 
 #include <omp.h>
@@ -363,17 +364,26 @@ void UpdateHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
     return;
   scratch->threads.resize(omp_get_max_threads());
   FillFaceRecords(mesh, face_normals, &scratch->faces);  // shared by all views
-  // One view per thread. Inside, RasterizeHitMapWith's own parallel regions and
-  // FillHitPoints's loop run on the calling thread alone.
-#pragma omp parallel for schedule(dynamic, 1)
-  for (size_t v = 0; v < views->size(); ++v) {
+  std::vector<size_t> changed;
+  for (size_t v = 0; v < views->size(); ++v)
+    if (update[v] != HitMapUpdate::kKeep) changed.push_back(v);
+  auto update_view = [&](size_t v) {
     if (update[v] == HitMapUpdate::kRasterize)
       RasterizeHitMapWith(mesh, scratch->faces, face_normals != nullptr, &(*views)[v],
                           &scratch->threads[omp_get_thread_num()]);
-    else if (update[v] == HitMapUpdate::kFollow)
+    else
       FillHitPoints(scratch->faces, face_normals != nullptr, &(*views)[v],
                     [](size_t) { return false; }, /*along_ray=*/true);
+  };
+  // One view per thread (inside, RasterizeHitMapWith's own parallel regions and
+  // FillHitPoints's loop run on the calling thread alone), or one view after the other
+  // with every thread in its loops (OnePerThread: a stereo pass updates one view).
+  if (!OnePerThread(changed.size())) {
+    for (size_t v : changed) update_view(v);
+    return;
   }
+#pragma omp parallel for schedule(dynamic, 1)
+  for (size_t k = 0; k < changed.size(); ++k) update_view(changed[k]);
 }
 
 void RasterizeHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,

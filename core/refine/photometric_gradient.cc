@@ -41,12 +41,13 @@ void WarpIntoView(const ViewLevel& vi, const ViewLevel& vj,
 
 }  // namespace
 
-void GradientAccumulator::Reset(const TriangleMesh& mesh, bool with_information) {
+void GradientAccumulator::Reset(const TriangleMesh& mesh, const VertexAdjacency& adjacency,
+                                bool with_information) {
   mesh_ = &mesh;
+  adjacency_ = &adjacency;
   faces_.assign(mesh.faces.size(), FaceSlot());
   if (with_information) information_.assign(mesh.faces.size(), Eigen::Vector3f::Zero());
   else information_.clear();
-  vertex_directions_.assign(mesh.vertices.size(), 0);
   seen_.assign(mesh.vertices.size(), 0);
   direction_ = -1;
   direction_bit_ = 0;
@@ -59,40 +60,56 @@ void GradientAccumulator::BeginDirection() {
 }
 
 void GradientAccumulator::CountDirections() {
-  for (size_t f = 0; f < faces_.size(); ++f) {
-    const uint32_t bits = faces_[f].directions;
-    if (!bits) continue;
-    faces_[f].directions = 0;
-    for (int k = 0; k < 3; ++k) vertex_directions_[mesh_->faces[f][k]] |= bits;
+  const VertexAdjacency& adjacency = *adjacency_;
+#pragma omp parallel for schedule(static)
+  for (long v = 0; v < long(seen_.size()); ++v) {
+    uint32_t directions = 0;
+    for (int k = adjacency.face_offsets[v]; k < adjacency.face_offsets[v + 1]; ++k)
+      directions |= faces_[adjacency.faces[k]].directions;
+    seen_[v] += __builtin_popcount(directions);
   }
-  for (size_t v = 0; v < seen_.size(); ++v) {
-    seen_[v] += __builtin_popcount(vertex_directions_[v]);
-    vertex_directions_[v] = 0;
-  }
+#pragma omp parallel for schedule(static)
+  for (long f = 0; f < long(faces_.size()); ++f) faces_[f].directions = 0;
 }
 
 void GradientAccumulator::AddTo(const std::vector<Eigen::Vector3f>& face_normals,
                                 std::vector<Eigen::Vector3d>* vertex_gradient,
                                 std::vector<int>* seen, std::vector<double>* information) {
   if (!mesh_) return;
-  if (information && !information_.empty()) {
-    for (size_t f = 0; f < information_.size(); ++f) {
+  const VertexAdjacency& adjacency = *adjacency_;
+  const bool with_information = information && !information_.empty();
+  // Each vertex gathers from its faces (ascending, as a scatter over the faces would add
+  // them: the same sums to the bit), so that the vertices run in parallel.
+#pragma omp parallel for schedule(static)
+  for (long v = 0; v < long(mesh_->vertices.size()); ++v) {
+    uint32_t directions = 0;  // since the last CountDirections
+    Eigen::Vector3d g = vertex_gradient ? (*vertex_gradient)[v] : Eigen::Vector3d::Zero();
+    double info = with_information ? (*information)[v] : 0.0;
+    const int begin = adjacency.face_offsets[v], end = adjacency.face_offsets[v + 1];
+    for (int k = begin; k < end; ++k) {
+      const int f = adjacency.faces[k];
+      if (k > begin && adjacency.faces[k - 1] == f) continue;  // a degenerate face, done
+      const FaceSlot& slot = faces_[f];
+      directions |= slot.directions;
       const Eigen::Vector3i& face = mesh_->faces[f];
-      for (int k = 0; k < 3; ++k) (*information)[face[k]] += double(information_[f][k]);
+      const Eigen::Vector3f& w = slot.weights;
+      const bool weighted = !(w.x() == 0 && w.y() == 0 && w.z() == 0);  // else no pixel
+      const int at1 = face[1] == v, at2 = face[2] == v;
+      if (int(face[0] == v) + at1 + at2 == 1) {  // the corner without a branch to mispredict
+        const int c = at1 + 2 * at2;
+        if (with_information) info += double(information_[f][c]);
+        if (weighted) g += double(w[c]) * face_normals[f].cast<double>();
+        continue;
+      }
+      for (int c = 0; c < 3; ++c) {  // v at two corners of a degenerate face
+        if (face[c] != v) continue;
+        if (with_information) info += double(information_[f][c]);
+        if (weighted) g += double(w[c]) * face_normals[f].cast<double>();
+      }
     }
-  }
-  if (vertex_gradient) {
-    for (size_t f = 0; f < faces_.size(); ++f) {
-      const Eigen::Vector3f& w = faces_[f].weights;
-      if (w.x() == 0 && w.y() == 0 && w.z() == 0) continue;  // no pixel
-      const Eigen::Vector3d normal = face_normals[f].cast<double>();
-      const Eigen::Vector3i& face = mesh_->faces[f];
-      for (int k = 0; k < 3; ++k) (*vertex_gradient)[face[k]] += double(w[k]) * normal;
-    }
-  }
-  if (seen) {
-    CountDirections();
-    for (size_t v = 0; v < seen_.size(); ++v) (*seen)[v] += seen_[v];
+    if (vertex_gradient) (*vertex_gradient)[v] = g;
+    if (with_information) (*information)[v] = info;
+    if (seen) (*seen)[v] += seen_[v] + __builtin_popcount(directions);
   }
 }
 
@@ -137,8 +154,9 @@ PairEnergy AccumulatePhotometricGradient(const ViewLevel& view_i, const ViewLeve
                                          PairWorkspace* workspace) {
   if (!vertex_gradient && !touched)
     return AccumulatePairGradient(view_i, view_j, face_normals, options, nullptr, workspace);
+  const VertexAdjacency adjacency = BuildVertexAdjacency(mesh);
   GradientAccumulator accumulator;
-  accumulator.Reset(mesh);
+  accumulator.Reset(mesh, adjacency);
   const PairEnergy energy = AccumulatePairGradient(view_i, view_j, face_normals, options,
                                                    &accumulator, workspace);
   std::vector<int> seen(touched ? mesh.vertices.size() : 0, 0);

@@ -12,6 +12,7 @@
 
 #include "core/geo/local_frame.h"
 #include "core/mesh/mesh.h"
+#include "core/mesh/topology.h"
 #include "core/refine/view_level.h"
 #include "core/refine/zncc.h"
 
@@ -51,9 +52,11 @@ struct PairWorkspace {
 // direction bits, 32 directions at a time.
 class GradientAccumulator {
  public:
-  // Zeroes everything for `mesh` (kept by reference until AddTo). with_information: also
-  // gather each vertex's height information (AddInformation).
-  void Reset(const TriangleMesh& mesh, bool with_information = false);
+  // Zeroes everything for `mesh` (kept by reference until AddTo, as is its `adjacency`,
+  // BuildVertexAdjacency's: AddTo gathers each vertex's faces, in parallel).
+  // with_information: also gather each vertex's height information (AddInformation).
+  void Reset(const TriangleMesh& mesh, const VertexAdjacency& adjacency,
+             bool with_information = false);
   bool with_information() const { return !information_.empty(); }
   // Starts a new pair-direction (for counting the directions that see each vertex).
   void BeginDirection();
@@ -71,7 +74,8 @@ class GradientAccumulator {
     information_[face] += Eigen::Vector3f(g2 * w0 * w0, g2 * u * u, g2 * v * v);
   }
   // vertex_gradient[v] += Σ_faces weight · normal; seen[v] += directions that saw v;
-  // information[v] += Σ_faces information (if gathered and not null).
+  // information[v] += Σ_faces information (if gathered and not null). Each vertex gathers
+  // from its faces, the vertices in parallel; it ends the accumulation (Reset before more).
   void AddTo(const std::vector<Eigen::Vector3f>& face_normals,
              std::vector<Eigen::Vector3d>* vertex_gradient, std::vector<int>* seen,
              std::vector<double>* information = nullptr);
@@ -85,9 +89,9 @@ class GradientAccumulator {
     uint32_t directions = 0;  // bit d % 32: direction d saw the face (since the last count)
   };
   const TriangleMesh* mesh_ = nullptr;
+  const VertexAdjacency* adjacency_ = nullptr;
   std::vector<FaceSlot> faces_;
   std::vector<Eigen::Vector3f> information_;  // per face, if gathered
-  std::vector<uint32_t> vertex_directions_;
   std::vector<int> seen_;
   int direction_ = -1;
   uint32_t direction_bit_ = 0;

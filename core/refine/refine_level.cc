@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "core/common/stage_time.h"
+#include "core/common/threads.h"
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/edge_bias.h"
@@ -69,7 +70,7 @@ std::vector<std::pair<int, int>> PairDirections(const std::vector<std::pair<int,
 double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& slot,
                        const std::vector<std::pair<int, int>>& pairs, const TriangleMesh& mesh,
                        const std::vector<Eigen::Vector3f>& normals,
-                       const PhotometricOptions& options, std::vector<PassScratch>* scratch,
+                       const VertexAdjacency& adjacency, const PhotometricOptions& options, std::vector<PassScratch>* scratch,
                        std::vector<Eigen::Vector3d>* gradient, std::vector<int>* seen,
                        int one_direction = -1, std::vector<double>* information = nullptr,
                        std::vector<PairEnergy>* energies = nullptr,
@@ -81,28 +82,44 @@ double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& sl
   if (scratch->size() < size_t(omp_get_max_threads())) scratch->resize(omp_get_max_threads());
   if (energies) energies->assign(directions.size(), PairEnergy{});
   if (windows) windows->assign(directions.size(), {});
+  auto direction = [&](size_t d, PassScratch& own) {
+    const auto [a, b] = directions[d];
+    const PairEnergy e = AccumulatePairGradient(views[slot[a]], views[slot[b]], normals, options,
+                                                accumulate ? &own.accumulator : nullptr,
+                                                &own.workspace);
+    if (energies) (*energies)[d] = e;
+    if (windows) (*windows)[d] = std::move(own.workspace.field.windows);
+    return e;
+  };
+  if (!OnePerThread(directions.size())) {
+    // One direction after the other, every thread in each one's warp (a stereo pass's
+    // single direction).
+    PassScratch& own = (*scratch)[0];
+    if (accumulate) own.accumulator.Reset(mesh, adjacency, information != nullptr);
+    for (size_t d = 0; d < directions.size(); ++d) {
+      const PairEnergy e = direction(d, own);
+      sum += e.sum_zncc;
+      count += e.num_windows;
+    }
+    if (accumulate) own.accumulator.AddTo(normals, gradient, seen, information);
+    return count > 0 ? sum / count : 0.0;
+  }
+  std::vector<char> took(scratch->size(), 0);  // per thread: a direction
 #pragma omp parallel
   {
     PassScratch& own = (*scratch)[omp_get_thread_num()];
-    GradientAccumulator& accumulator = own.accumulator;
-    if (accumulate) accumulator.Reset(mesh, information != nullptr);
-    PairWorkspace& workspace = own.workspace;
+    if (accumulate) own.accumulator.Reset(mesh, adjacency, information != nullptr);
 #pragma omp for schedule(dynamic, 1) reduction(+ : sum, count)
     for (size_t d = 0; d < directions.size(); ++d) {
-      const auto [a, b] = directions[d];
-      const PairEnergy e =
-          AccumulatePairGradient(views[slot[a]], views[slot[b]], normals, options,
-                                 accumulate ? &accumulator : nullptr, &workspace);
+      const PairEnergy e = direction(d, own);
       sum += e.sum_zncc;
       count += e.num_windows;
-      if (energies) (*energies)[d] = e;
-      if (windows) (*windows)[d] = std::move(workspace.field.windows);
-    }
-    if (accumulate) {
-#pragma omp critical
-      accumulator.AddTo(normals, gradient, seen, information);
+      took[omp_get_thread_num()] = 1;
     }
   }
+  // The threads' shares in thread order (each AddTo in parallel over the vertices).
+  for (size_t t = 0; t < took.size() && accumulate; ++t)
+    if (took[t]) (*scratch)[t].accumulator.AddTo(normals, gradient, seen, information);
   return count > 0 ? sum / count : 0.0;
 }
 
@@ -167,7 +184,9 @@ double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& so
   }
   std::vector<PassScratch> scratch;
   if (information) information->assign(mesh.num_vertices(), 0.0);
-  return PhotometricPass(views, slot, pairs, mesh, normals, photo, &scratch, nullptr, nullptr,
+  // (only the information is gathered, from the vertices' faces)
+  const VertexAdjacency adjacency = information ? BuildVertexAdjacency(mesh) : VertexAdjacency{};
+  return PhotometricPass(views, slot, pairs, mesh, normals, adjacency, photo, &scratch, nullptr, nullptr,
                          /*one_direction=*/-1, information, nullptr, windows);
 }
 
@@ -395,7 +414,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
     std::fill(seen.begin(), seen.end(), 0);
     if (it == information_from && it > 0) std::fill(information.begin(), information.end(), 0.0);
-    const double zncc = PhotometricPass(views, slot, group_pairs, *mesh, normals, photo, &scratch,
+    const double zncc = PhotometricPass(views, slot, group_pairs, *mesh, normals, adjacency, photo,
+                                        &scratch,
                                         measure_only ? nullptr : &gradient,
                                         measure_only ? nullptr : &seen, one_direction,
                                         (it == 0 && (data_confidence || initial_prior)) ||

@@ -286,8 +286,9 @@ void BM_PairDirectionRefinement(benchmark::State& state) {
   RasterizeHitMap(mesh, &view_j, &raster, &normals);
   PhotometricOptions options;
   options.visibility_tolerance_m = 2 * kGsdM;
+  const VertexAdjacency adjacency = BuildVertexAdjacency(mesh);
   GradientAccumulator accumulator;
-  accumulator.Reset(mesh);
+  accumulator.Reset(mesh, adjacency);
   PairWorkspace workspace;
   for (auto _ : state)
     benchmark::DoNotOptimize(

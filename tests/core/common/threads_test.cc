@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <thread>
+#include <vector>
 
 namespace satmesh {
 namespace {
@@ -34,6 +35,19 @@ TEST(ShareProcessorsAmongWorkers, NeverBelowOneThread) {
   std::thread worker([&] { returned = ShareProcessorsAmongWorkers(100000); });
   worker.join();
   EXPECT_EQ(returned, 1);
+}
+
+// Units of work run one per thread when every thread gets as many (or the remainder is
+// small), else one after the other with the team inside each.
+TEST(OnePerThread, WhenTheUnitsShareOutEvenly) {
+  std::vector<int> one_per_thread;
+  std::thread worker([&] {
+    omp_set_num_threads(2);
+    for (size_t items = 0; items <= 9; ++items) one_per_thread.push_back(OnePerThread(items));
+  });
+  worker.join();
+  // 0 and 1 units leave a thread idle; 3, 5 and 7 a remainder; from 8 it is small.
+  EXPECT_EQ(one_per_thread, (std::vector<int>{0, 0, 1, 0, 1, 0, 1, 0, 1, 1}));
 }
 
 }  // namespace

@@ -82,8 +82,9 @@ TEST(GradientAccumulator, CountsTheDirectionsThatSawEachVertex) {
   TriangleMesh mesh;
   mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
   mesh.faces = {{0, 1, 2}, {1, 3, 2}};
+  const VertexAdjacency adjacency = BuildVertexAdjacency(mesh);
   GradientAccumulator accumulator;
-  accumulator.Reset(mesh);
+  accumulator.Reset(mesh, adjacency);
   int expected_face0 = 0, expected_face1 = 0, expected_both = 0;
   for (int d = 0; d < 70; ++d) {
     accumulator.BeginDirection();
@@ -107,6 +108,28 @@ TEST(GradientAccumulator, CountsTheDirectionsThatSawEachVertex) {
   // Vertex 3 (face 1's second vertex, weight u = 0.5, g = 2).
   EXPECT_NEAR(gradient[3].z(), 0.5 * 2 * 4 * expected_face1, 1e-4);
   EXPECT_EQ(gradient[0].x(), 0.0);
+}
+
+// AddTo gathers each vertex's faces: a degenerate face that names a vertex at two corners
+// gives it both corners' weights, as a scatter over the faces' corners would.
+TEST(GradientAccumulator, GathersBothCornersOfADegenerateFace) {
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  mesh.faces = {{0, 1, 2}, {0, 0, 1}};
+  const VertexAdjacency adjacency = BuildVertexAdjacency(mesh);
+  GradientAccumulator accumulator;
+  accumulator.Reset(mesh, adjacency);
+  accumulator.BeginDirection();
+  accumulator.AddPixel(0, 0.25f, 0.25f, 1.f);  // weights 0.5, 0.25, 0.25
+  accumulator.AddPixel(1, 0.5f, 0.25f, 2.f);   // weights 0.5, 1.0, 0.5
+  const std::vector<Eigen::Vector3f> normals(2, Eigen::Vector3f::UnitZ());
+  std::vector<Eigen::Vector3d> gradient(3, Eigen::Vector3d::Zero());
+  std::vector<int> seen(3, 0);
+  accumulator.AddTo(normals, &gradient, &seen);
+  EXPECT_NEAR(gradient[0].z(), 0.5 + 0.5 + 1.0, 1e-6);  // face 0's corner 0, face 1's 0 and 1
+  EXPECT_NEAR(gradient[1].z(), 0.25 + 0.5, 1e-6);
+  EXPECT_NEAR(gradient[2].z(), 0.25, 1e-6);
+  EXPECT_EQ(seen, (std::vector<int>{1, 1, 1}));
 }
 
 TEST(AccumulatePhotometricGradient, VectorizedWarpMatchesTheScalarReference) {
