@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+
+#include <omp.h>
 
 #include <cpl_conv.h>
 #include <ogr_spatialref.h>
@@ -80,13 +83,27 @@ Eigen::Vector3d CrsTransform::Apply(const Eigen::Vector3d& point) const {
 }
 
 void CrsTransform::Apply(std::vector<Eigen::Vector3d>* points) const {
-  const size_t n = points->size();
+  const long n = long(points->size());
   if (n == 0) return;
   std::vector<double> x(n), y(n), z(n);
   std::vector<int> ok(n, 0);
-  for (size_t i = 0; i < n; ++i) x[i] = (*points)[i].x(), y[i] = (*points)[i].y(), z[i] = (*points)[i].z();
-  impl_->transform->Transform(n, x.data(), y.data(), z.data(), ok.data());
-  for (size_t i = 0; i < n; ++i) {
+  for (long i = 0; i < n; ++i) x[i] = (*points)[i].x(), y[i] = (*points)[i].y(), z[i] = (*points)[i].z();
+  // A tile's mesh (hundreds of thousands of points, ~1 us each through PROJ) in one chunk
+  // a thread, each through its own copy of the transformation (one is not to be shared
+  // between threads; GDAL gives each thread its own PROJ context).
+  constexpr long kPointsPerThread = 1 << 15;
+  const int threads = int(std::clamp<long>(n / kPointsPerThread, 1, omp_get_max_threads()));
+#pragma omp parallel num_threads(threads)
+  {
+    const int t = omp_get_thread_num(), team = omp_get_num_threads();
+    const long begin = n * t / team, end = n * (t + 1) / team;
+    std::unique_ptr<OGRCoordinateTransformation> own(t == 0 ? nullptr : impl_->transform->Clone());
+    OGRCoordinateTransformation* transform = t == 0 ? impl_->transform.get() : own.get();
+    if (transform && end > begin)
+      transform->Transform(int(end - begin), x.data() + begin, y.data() + begin, z.data() + begin,
+                           ok.data() + begin);
+  }
+  for (long i = 0; i < n; ++i) {
     SATMESH_CHECK(ok[i] != 0, ErrorCode::kInvalidInput,
                   "CRS transform " + impl_->description + " failed for point " + std::to_string(i));
     (*points)[i] = {x[i], y[i], z[i]};
