@@ -13,7 +13,6 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
-#include <functional>
 #include <utility>
 #include <vector>
 
@@ -74,11 +73,8 @@ class ClosestTriangle {
 // back on after they moved (as CGAL's remeshing projects them).
 class SurfaceProjector {
  public:
-  explicit SurfaceProjector(const SurfaceMesh& sm) : SurfaceProjector(sm, sm.faces()) {}
-  // Only `faces` of sm: the surface near the vertices that will be put back on it.
-  template <typename FaceRange>
-  SurfaceProjector(const SurfaceMesh& sm, const FaceRange& faces) {
-    for (auto f : faces) {
+  explicit SurfaceProjector(const SurfaceMesh& sm) {
+    for (auto f : sm.faces()) {
       std::array<Kernel::Point_3, 3> q;
       int k = 0;
       for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) q[k++] = sm.point(v);
@@ -111,13 +107,11 @@ class SurfaceProjector {
 // moved vertex is degenerate (the true tri-stereo 0.5 m building mesh remeshed at 2 m
 // crashed), so it is off there and done here. hints ("v:projected", initially
 // SurfaceProjector::kNoHint): per vertex, the triangle of `surface` it was last projected
-// onto, read and written (valid for this `surface` only). movable: which vertices may move
-// (empty: all).
+// onto, read and written (valid for this `surface` only).
 using ProjectionHints = SurfaceMesh::Property_map<SurfaceMesh::Vertex_index, uint32_t>;
 template <typename ConstraintMap>
 inline void RelaxTangentially(ConstraintMap is_constrained, const SurfaceProjector& surface,
-                              ProjectionHints hints, SurfaceMesh* sm,
-                              const std::function<bool(SurfaceMesh::Vertex_index)>& movable = {}) {
+                              ProjectionHints hints, SurfaceMesh* sm) {
   using Vector = Eigen::Vector3d;
   const auto at = [&](SurfaceMesh::Vertex_index v) {
     const auto& p = sm->point(v);
@@ -131,9 +125,7 @@ inline void RelaxTangentially(ConstraintMap is_constrained, const SurfaceProject
   };
   std::vector<std::pair<SurfaceMesh::Vertex_index, Vector>> moves;
   for (auto v : sm->vertices()) {
-    if (sm->is_isolated(v) || sm->is_border(v, /*check_all_incident_halfedges=*/true) ||
-        (movable && !movable(v)))
-      continue;
+    if (sm->is_isolated(v) || sm->is_border(v, /*check_all_incident_halfedges=*/true)) continue;
     Vector centre = Vector::Zero(), normal = Vector::Zero();
     int n = 0;
     bool free = true;

@@ -20,12 +20,13 @@ struct CoarseMeshOptions {
   double target_edge_m = 2.0;  // target edge length, metres, > 0
   int iterations = 3;          // CGAL isotropic remeshing iterations, [1, 20]
   // A mesh of more faces is remeshed in blocks of about this many, in parallel (their
-  // borders kept, then the band around the borders remeshed as one); >= 1000. A block's
-  // remesh costs more per face the larger the block (stereo 0.5 m, 179k faces of the DSM's
-  // 1 m grid remeshed to 581k at 1.0 m edges, both blocks together: 9.5-10.4 s wall in
-  // blocks of 10000 faces, 6.4-7.3 s of 4000, 5.5 s of 1500, 13.6 s of 30000), while the
-  // band, remeshed by one thread, grows as blocks shrink (2.5 s at 4000, 3.1 s at 1500;
-  // docs/benchmarks-history.md, session 27).
+  // borders kept, then the band around the borders remeshed in pieces, also in parallel);
+  // >= 1000. A block's remesh costs more per face the larger the block (stereo 0.5 m, 179k
+  // faces of the DSM's 1 m grid remeshed to 581k at 1.0 m edges, both blocks together:
+  // 9.5-10.4 s wall in blocks of 10000 faces, 6.4-7.3 s of 4000, 5.5 s of 1500, 13.6 s of
+  // 30000; docs/benchmarks-history.md, session 27), while the band grows as blocks shrink
+  // (session 38, the band in pieces: 2000 faces a block make the stereo job 6% faster than
+  // 4000, with roofs 0.347 -> 0.349 m).
   size_t faces_per_block = 4000;
   // > 0: the input's creases, edges whose two faces' normals differ by more than this
   // (degrees), are kept where they are, as the border is: a DSM's walls keep their top and
