@@ -64,13 +64,15 @@ std::vector<std::pair<int, int>> PairDirections(const std::vector<std::pair<int,
 }
 
 // Mean ZNCC over all pair-directions; fills the gradient and per-vertex pair counts.
-// Pair-directions run in parallel (one per thread, gathered per face by each thread's
-// accumulator, scattered to the vertices once at the end). The views' hit maps, with
-// their ray cosines, must be current for the mesh and its face normals.
+// Pair-directions run in parallel (one per thread, or one after the other with every
+// thread in each: OnePerThread; gathered per face by each thread's accumulator, added to
+// the vertices once at the end). The views' hit maps, with their ray cosines, must be
+// current for the mesh and its face normals; adjacency: the mesh's (BuildVertexAdjacency).
 double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& slot,
                        const std::vector<std::pair<int, int>>& pairs, const TriangleMesh& mesh,
                        const std::vector<Eigen::Vector3f>& normals,
-                       const VertexAdjacency& adjacency, const PhotometricOptions& options, std::vector<PassScratch>* scratch,
+                       const VertexAdjacency& adjacency, const PhotometricOptions& options,
+                       std::vector<PassScratch>* scratch,
                        std::vector<Eigen::Vector3d>* gradient, std::vector<int>* seen,
                        int one_direction = -1, std::vector<double>* information = nullptr,
                        std::vector<PairEnergy>* energies = nullptr,
