@@ -44,4 +44,9 @@ double MeanEdgeLength(const TriangleMesh& mesh);
 // Unique undirected edges (a < b), sorted. O(n log n).
 std::vector<Eigen::Vector2i> UniqueEdges(const TriangleMesh& mesh);
 
+// Renumbers vertices along a Z-order curve and orders faces by their first vertex, so
+// that everything indexed by face or vertex (normals, hits, gradients, Embree's
+// primitives) is read in nearly sequential order by neighbouring pixels.
+void SortSpatially(TriangleMesh* mesh);
+
 }  // namespace satmesh

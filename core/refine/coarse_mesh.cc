@@ -486,48 +486,4 @@ TriangleMesh RemeshIsotropic(const TriangleMesh& mesh, const CoarseMeshOptions& 
   return out;
 }
 
-namespace {
-
-// Interleaves the low 21 bits of x, y, z (Morton / Z-order code).
-uint64_t Morton3(uint32_t x, uint32_t y, uint32_t z) {
-  auto spread = [](uint64_t v) {
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffULL;
-    v = (v | v << 16) & 0x1f0000ff0000ffULL;
-    v = (v | v << 8) & 0x100f00f00f00f00fULL;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-    v = (v | v << 2) & 0x1249249249249249ULL;
-    return v;
-  };
-  return spread(x) | spread(y) << 1 | spread(z) << 2;
-}
-
-}  // namespace
-
-void SortSpatially(TriangleMesh* mesh) {
-  const size_t nv = mesh->vertices.size();
-  if (nv == 0) return;
-  Eigen::Vector3f lo = mesh->vertices[0], hi = lo;
-  for (const auto& p : mesh->vertices) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  const Eigen::Vector3f scale = (hi - lo).cwiseMax(1e-6f).cwiseInverse() * float((1 << 21) - 1);
-  std::vector<std::pair<uint64_t, int>> keys(nv);
-  for (size_t i = 0; i < nv; ++i) {
-    const Eigen::Vector3f q = (mesh->vertices[i] - lo).cwiseProduct(scale);
-    keys[i] = {Morton3(uint32_t(q.x()), uint32_t(q.y()), uint32_t(q.z())), int(i)};
-  }
-  std::sort(keys.begin(), keys.end());
-  std::vector<int> new_index(nv);
-  std::vector<Eigen::Vector3f> vertices(nv);
-  for (size_t k = 0; k < nv; ++k) {
-    new_index[keys[k].second] = int(k);
-    vertices[k] = mesh->vertices[keys[k].second];
-  }
-  mesh->vertices = std::move(vertices);
-  for (auto& f : mesh->faces)
-    for (int k = 0; k < 3; ++k) f[k] = new_index[f[k]];
-  // Faces in the order of their smallest vertex (orientation kept).
-  std::sort(mesh->faces.begin(), mesh->faces.end(),
-            [](const Eigen::Vector3i& a, const Eigen::Vector3i& b) { return a.minCoeff() < b.minCoeff(); });
-}
-
 }  // namespace satmesh

@@ -55,13 +55,8 @@ double GridKeepingTargetEdge(double edge_m, double cell_m);
 // Non-manifold faces of the input are dropped (logged). The result depends on the mesh
 // and the options only, not on the number of threads. Throws Error{kInvalidInput} if
 // nothing is left, Error{kCancelled} between remeshing iterations when progress says so.
-// The result is sorted spatially (SortSpatially).
+// The result is sorted spatially (SortSpatially, core/mesh/topology.h).
 TriangleMesh RemeshIsotropic(const TriangleMesh& mesh, const CoarseMeshOptions& options,
                              const Progress& progress = {});
-
-// Renumbers vertices along a Z-order curve and orders faces by their first vertex, so
-// that everything indexed by face or vertex (normals, hits, gradients, Embree's
-// primitives) is read in nearly sequential order by neighbouring pixels.
-void SortSpatially(TriangleMesh* mesh);
 
 }  // namespace satmesh

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/coarse_mesh.h"
 #include "core/refine/mesh_resolution.h"

@@ -8,14 +8,13 @@
 #include <optional>
 
 #include "core/common/stage_time.h"
-#include "core/common/threads.h"
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/edge_bias.h"
 #include "core/refine/height_confidence.h"
 #include "core/refine/hit_map_raster.h"
 #include "core/refine/momentum.h"
-#include "core/refine/photometric_gradient.h"
+#include "core/refine/photometric_pass.h"
 #include "core/refine/sunlight.h"
 #include "core/refine/thin_plate.h"
 #include "core/refine/view_level.h"
@@ -42,88 +41,6 @@ constexpr double kInitialPullPerIteration = 0.1;
 // pairs_per_iteration: the iterations at a level's end that take every pair again (6 before
 // session 33: the large jax job's levels 0.85x the time at 3, facades and F -0.3 points).
 constexpr int kEveryPairAtTheEnd = 3;
-
-// One thread's buffers of the photometric pass, kept across iterations: they are tens
-// of MB a thread at level 0, and fresh ones cost page faults and zeroing every pass.
-struct PassScratch {
-  GradientAccumulator accumulator;
-  PairWorkspace workspace;
-};
-
-// The pair-directions (i, j) of `pairs`: both, or with one_direction >= 0 pair k as (i, j)
-// if (one_direction + k) is even, else as (j, i).
-std::vector<std::pair<int, int>> PairDirections(const std::vector<std::pair<int, int>>& pairs,
-                                                int one_direction) {
-  std::vector<std::pair<int, int>> directions;
-  for (size_t k = 0; k < pairs.size(); ++k) {
-    const auto [i, j] = pairs[k];
-    if (one_direction < 0) directions.insert(directions.end(), {{i, j}, {j, i}});
-    else directions.push_back((one_direction + k) % 2 == 0 ? std::pair{i, j} : std::pair{j, i});
-  }
-  return directions;
-}
-
-// Mean ZNCC over all pair-directions; fills the gradient and per-vertex pair counts.
-// Pair-directions run in parallel (one per thread, or one after the other with every
-// thread in each: OnePerThread; gathered per face by each thread's accumulator, added to
-// the vertices once at the end). The views' hit maps, with their ray cosines, must be
-// current for the mesh and its face normals; adjacency: the mesh's (BuildVertexAdjacency).
-double PhotometricPass(std::vector<ViewLevel>& views, const std::vector<int>& slot,
-                       const std::vector<std::pair<int, int>>& pairs, const TriangleMesh& mesh,
-                       const std::vector<Eigen::Vector3f>& normals,
-                       const VertexAdjacency& adjacency, const PhotometricOptions& options,
-                       std::vector<PassScratch>* scratch,
-                       std::vector<Eigen::Vector3d>* gradient, std::vector<int>* seen,
-                       int one_direction = -1, std::vector<double>* information = nullptr,
-                       std::vector<PairEnergy>* energies = nullptr,
-                       std::vector<std::vector<float>>* windows = nullptr) {
-  const std::vector<std::pair<int, int>> directions = PairDirections(pairs, one_direction);
-  const bool accumulate = gradient || seen || information;
-  double sum = 0;
-  long count = 0;
-  if (scratch->size() < size_t(omp_get_max_threads())) scratch->resize(omp_get_max_threads());
-  if (energies) energies->assign(directions.size(), PairEnergy{});
-  if (windows) windows->assign(directions.size(), {});
-  auto direction = [&](size_t d, PassScratch& own) {
-    const auto [a, b] = directions[d];
-    const PairEnergy e = AccumulatePairGradient(views[slot[a]], views[slot[b]], normals, options,
-                                                accumulate ? &own.accumulator : nullptr,
-                                                &own.workspace);
-    if (energies) (*energies)[d] = e;
-    if (windows) (*windows)[d] = std::move(own.workspace.field.windows);
-    return e;
-  };
-  if (!OnePerThread(directions.size())) {
-    // One direction after the other, every thread in each one's warp (a stereo pass's
-    // single direction).
-    PassScratch& own = (*scratch)[0];
-    if (accumulate) own.accumulator.Reset(mesh, adjacency, information != nullptr);
-    for (size_t d = 0; d < directions.size(); ++d) {
-      const PairEnergy e = direction(d, own);
-      sum += e.sum_zncc;
-      count += e.num_windows;
-    }
-    if (accumulate) own.accumulator.AddTo(normals, gradient, seen, information);
-    return count > 0 ? sum / count : 0.0;
-  }
-  std::vector<char> took(scratch->size(), 0);  // per thread: a direction
-#pragma omp parallel
-  {
-    PassScratch& own = (*scratch)[omp_get_thread_num()];
-    if (accumulate) own.accumulator.Reset(mesh, adjacency, information != nullptr);
-#pragma omp for schedule(dynamic, 1) reduction(+ : sum, count)
-    for (size_t d = 0; d < directions.size(); ++d) {
-      const PairEnergy e = direction(d, own);
-      sum += e.sum_zncc;
-      count += e.num_windows;
-      took[omp_get_thread_num()] = 1;
-    }
-  }
-  // The threads' shares in thread order (each AddTo in parallel over the vertices).
-  for (size_t t = 0; t < took.size() && accumulate; ++t)
-    if (took[t]) (*scratch)[t].accumulator.AddTo(normals, gradient, seen, information);
-  return count > 0 ? sum / count : 0.0;
-}
 
 // The level data of every view that takes part in a pair; slot[view] indexes it (-1: none).
 std::vector<ViewLevel> MakeViewLevels(const RefineInput& input,
@@ -188,7 +105,8 @@ double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& so
   if (information) information->assign(mesh.num_vertices(), 0.0);
   // (only the information is gathered, from the vertices' faces)
   const VertexAdjacency adjacency = information ? BuildVertexAdjacency(mesh) : VertexAdjacency{};
-  return PhotometricPass(views, slot, pairs, mesh, normals, adjacency, photo, &scratch, nullptr, nullptr,
+  return PhotometricPass(views, slot, pairs, mesh, normals, adjacency, photo, &scratch, nullptr,
+                         nullptr,
                          /*one_direction=*/-1, information, nullptr, windows);
 }
 
