@@ -87,7 +87,10 @@ void CrsTransform::Apply(std::vector<Eigen::Vector3d>* points) const {
   if (n == 0) return;
   std::vector<double> x(n), y(n), z(n);
   std::vector<int> ok(n, 0);
-  for (long i = 0; i < n; ++i) x[i] = (*points)[i].x(), y[i] = (*points)[i].y(), z[i] = (*points)[i].z();
+  for (long i = 0; i < n; ++i) {
+    const Eigen::Vector3d& p = (*points)[i];
+    x[i] = p.x(), y[i] = p.y(), z[i] = p.z();
+  }
   // A tile's mesh (hundreds of thousands of points, ~1 us each through PROJ) in one chunk
   // a thread, each through its own copy of the transformation (one is not to be shared
   // between threads; GDAL gives each thread its own PROJ context).

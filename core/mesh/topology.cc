@@ -234,7 +234,9 @@ void SortSpatially(TriangleMesh* mesh) {
     for (int k = 0; k < 3; ++k) f[k] = new_index[f[k]];
   // Faces in the order of their smallest vertex (orientation kept).
   std::sort(mesh->faces.begin(), mesh->faces.end(),
-            [](const Eigen::Vector3i& a, const Eigen::Vector3i& b) { return a.minCoeff() < b.minCoeff(); });
+            [](const Eigen::Vector3i& a, const Eigen::Vector3i& b) {
+              return a.minCoeff() < b.minCoeff();
+            });
 }
 
 }  // namespace satmesh

@@ -419,9 +419,9 @@ TriangleMesh RemeshFaceLists(const TriangleMesh& mesh, const std::vector<std::ve
 // (one piece around each corner of the blocks, cut half-way along their borders), also in
 // parallel, each keeping only the vertices it shares with the rest (its creases and the
 // mesh's own border split and collapsed, as in one piece). Only the short cuts across the
-// band, where a piece's border crosses it, keep the blocks' edges. (Before, the band was remeshed as one
-// patch by one thread: stereo 0.5 m s1, 42 blocks, a band of 67k faces, 0.7 s of a 6.7 s
-// job, with the stitching into one CGAL mesh it needed 0.2 s more.)
+// band, where a piece's border crosses it, keep the blocks' edges. (Before, the band was
+// remeshed as one patch by one thread: stereo 0.5 m s1, 42 blocks, a band of 67k faces,
+// 0.7 s of a 6.7 s job, and its stitching into one CGAL mesh 0.2 s more.)
 TriangleMesh RemeshInBlocks(TriangleMesh mesh, const BlockGrid& grid,
                             const CoarseMeshOptions& options, const Progress& progress) {
   std::vector<int> block(mesh.faces.size());
