@@ -1,4 +1,3 @@
-#include "core/common/threads.h"
 #include "core/refine/hit_map_raster.h"
 
 #include <omp.h>
@@ -7,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/common/threads.h"
 #include "core/refine/lattice_avx2.h"
 
 namespace satmesh {
@@ -377,7 +377,9 @@ void UpdateHitMaps(const TriangleMesh& mesh, std::vector<ViewLevel>* views,
   };
   // One view per thread (inside, RasterizeHitMapWith's own parallel regions and
   // FillHitPoints's loop run on the calling thread alone), or one view after the other
-  // with every thread in its loops (OnePerThread: a stereo pass updates one view).
+  // with every thread in its loops (OnePerThread: a stereo pass updates one view). (Not
+  // `omp parallel if`: its loops then run as nested regions, whose teams cost stereo 0.5 m
+  // s1's hit maps 0.55 -> 0.90 s.)
   if (!OnePerThread(changed.size())) {
     for (size_t v : changed) update_view(v);
     return;

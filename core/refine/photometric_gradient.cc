@@ -94,17 +94,16 @@ void GradientAccumulator::AddTo(const std::vector<Eigen::Vector3f>& face_normals
       const Eigen::Vector3i& face = mesh_->faces[f];
       const Eigen::Vector3f& w = slot.weights;
       const bool weighted = !(w.x() == 0 && w.y() == 0 && w.z() == 0);  // else no pixel
+      const auto add = [&](int c) {  // corner c is v
+        if (with_information) info += double(information_[f][c]);
+        if (weighted) g += double(w[c]) * face_normals[f].cast<double>();
+      };
       const int at1 = face[1] == v, at2 = face[2] == v;
-      if (int(face[0] == v) + at1 + at2 == 1) {  // the corner without a branch to mispredict
-        const int c = at1 + 2 * at2;
-        if (with_information) info += double(information_[f][c]);
-        if (weighted) g += double(w[c]) * face_normals[f].cast<double>();
-        continue;
-      }
-      for (int c = 0; c < 3; ++c) {  // v at two corners of a degenerate face
-        if (face[c] != v) continue;
-        if (with_information) info += double(information_[f][c]);
-        if (weighted) g += double(w[c]) * face_normals[f].cast<double>();
+      if (int(face[0] == v) + at1 + at2 == 1) {
+        add(at1 + 2 * at2);  // the corner without a branch to mispredict
+      } else {
+        for (int c = 0; c < 3; ++c)  // v at two corners of a degenerate face
+          if (face[c] == v) add(c);
       }
     }
     if (vertex_gradient) (*vertex_gradient)[v] = g;
