@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 #include <numbers>
@@ -286,8 +287,8 @@ namespace {
 // centre (NaN where none). retry_boundary: rays that miss are retried off the boundary
 // (RetryOnBoundary, heights only).
 template <typename ValueFn>
-Dsm RasterizeFromAbove(const TriangleMesh& mesh, const Dsm& grid, ValueFn value,
-                       bool retry_boundary) {
+Dsm RasterizeFromAbove(const TriangleMesh& mesh, const Dsm& grid, const RayScene* given_scene,
+                       ValueFn value, bool retry_boundary) {
   CheckNorthUp(grid.geo_transform, "DsmFromMesh grid");
   SATMESH_CHECK(grid.width >= 0 && grid.height >= 0, ErrorCode::kInvalidArgument,
                 "DsmFromMesh: negative grid size");
@@ -300,7 +301,8 @@ Dsm RasterizeFromAbove(const TriangleMesh& mesh, const Dsm& grid, ValueFn value,
   if (mesh.faces.empty() || out.z.empty()) return out;
   WarnIfCrsDiffers(mesh.crs, grid.crs_wkt);
 
-  RayScene scene(mesh);  // validates indices and finiteness
+  std::optional<RayScene> own;  // built here unless given: validates indices and finiteness
+  const RayScene& scene = given_scene ? *given_scene : own.emplace(mesh);
   float top = -std::numeric_limits<float>::infinity();
   float extent = 0.f;
   for (const auto& v : mesh.vertices) {
@@ -345,17 +347,18 @@ Dsm RasterizeFromAbove(const TriangleMesh& mesh, const Dsm& grid, ValueFn value,
 
 }  // namespace
 
-Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid) {
+Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid, const RayScene* scene) {
   return RasterizeFromAbove(
-      mesh, grid, [&](const RayHit& hit) { return float(mesh.origin.z() + HitZ(mesh, hit)); },
+      mesh, grid, scene,
+      [&](const RayHit& hit) { return float(mesh.origin.z() + HitZ(mesh, hit)); },
       /*retry_boundary=*/true);
 }
 
-Dsm HeightSigmaFromMesh(const TriangleMesh& mesh, const Dsm& grid) {
+Dsm HeightSigmaFromMesh(const TriangleMesh& mesh, const Dsm& grid, const RayScene* scene) {
   SATMESH_CHECK(mesh.height_sigma.size() == mesh.vertices.size(), ErrorCode::kInvalidArgument,
                 "HeightSigmaFromMesh: the mesh has no height_sigma per vertex");
   return RasterizeFromAbove(
-      mesh, grid,
+      mesh, grid, scene,
       [&](const RayHit& hit) {
         const Eigen::Vector3i& f = mesh.faces[hit.face];
         const float a = mesh.height_sigma[f[0]], b = mesh.height_sigma[f[1]],

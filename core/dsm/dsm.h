@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/mesh/mesh.h"
+#include "core/raycast/ray_scene.h"
 
 namespace satmesh {
 
@@ -42,12 +43,15 @@ TriangleMesh MeshFromDsm(const Dsm& dsm);
 // mesh.origin + vertices must be in grid's CRS. A centre exactly on the mesh boundary
 // (e.g. every boundary vertex of MeshFromDsm's mesh) counts as a hit: rays that miss are
 // retried 1e-3 cell away and evaluated on the hit face's plane at the exact centre, so
-// DsmFromMesh(MeshFromDsm(d), d) returns every triangulated cell of d unchanged.
-Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid);
+// DsmFromMesh(MeshFromDsm(d), d) returns every triangulated cell of d unchanged. scene:
+// the mesh's own Embree scene where the caller has one (two rasters of one mesh), else
+// built here.
+Dsm DsmFromMesh(const TriangleMesh& mesh, const Dsm& grid, const RayScene* scene = nullptr);
 // The same grid holding the topmost surface's height_sigma (barycentric between its
 // vertices; +inf where a corner is seen by no image; NaN where no surface). The mesh must
 // carry height_sigma.
-Dsm HeightSigmaFromMesh(const TriangleMesh& mesh, const Dsm& grid);
+Dsm HeightSigmaFromMesh(const TriangleMesh& mesh, const Dsm& grid,
+                        const RayScene* scene = nullptr);
 
 // The heights' noise at the scale of one cell, in the DSM's height units: the robust
 // (1.4826 x MAD) spread of the second differences z[i-1] - 2 z[i] + z[i+1] along rows and

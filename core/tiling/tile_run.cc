@@ -13,6 +13,7 @@
 #include "core/dsm/dsm.h"
 #include "core/geo/crs.h"
 #include "core/mesh/mesh_io.h"
+#include "core/raycast/ray_scene.h"
 #include "core/tiling/memory_budget.h"
 #include "core/tiling/tile_input.h"
 
@@ -237,11 +238,13 @@ TileResult RunTile(const JobSpec& spec, const JobPlan& plan, int tile_index,
     const Dsm grid = TileGrid(plan, tile.padded_cells);
     {
       const TriangleMesh padded_mesh = ToTriangleMesh(padded, plan.dsm.crs_wkt);
-      const Dsm padded_dsm = DsmFromMesh(padded_mesh, grid);
-      WriteAtomically(fs::path(out_dir) / TileDsmPath(tile), [&](const std::string& p) { WriteDsm(p, padded_dsm); });
+      const RayScene scene(padded_mesh);  // both rasters' (one BVH, not two)
+      const Dsm padded_dsm = DsmFromMesh(padded_mesh, grid, &scene);
+      WriteAtomically(fs::path(out_dir) / TileDsmPath(tile),
+                      [&](const std::string& p) { WriteDsm(p, padded_dsm); });
       if (!local.height_sigma.empty()) {
-        const Dsm confidence =
-            ConfidenceFromHeightSigma(HeightSigmaFromMesh(padded_mesh, grid), r.refine.gsd_m);
+        const Dsm confidence = ConfidenceFromHeightSigma(
+            HeightSigmaFromMesh(padded_mesh, grid, &scene), r.refine.gsd_m);
         WriteAtomically(fs::path(out_dir) / TileConfidencePath(tile),
                         [&](const std::string& p) { WriteDsm(p, confidence); });
       }
