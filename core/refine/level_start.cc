@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
@@ -18,6 +20,14 @@ namespace {
 // FollowInitialDetail looks for the initial surface within this many GSDs of the coarse
 // mesh: farther, the coarse mesh is not an approximation of it there (a hole, a cut).
 constexpr double kInitialDetailReachGsd = 4;
+
+// One pair's adaptive start (AdaptiveStart): its remesh's edge in coarse edges (3.7 pixels
+// of 2), and the height sigma (GSDs) within which the pair resolves a face, which is then
+// halved at once. A 4-split of the 3.7-pixel remesh holds the 2-pixel remesh's density
+// on the real Pleiades pair's flat parts (the 4-split of a 4-pixel remesh, 116k -> 464k
+// faces against 519k, left its held-out pairs 0.0003-0.0005 lower).
+constexpr double kOnePairFlatEdgeFactor = 1.85;
+constexpr double kOnePairResolvedSigmaGsd = 2;
 
 // The median vertex's height sigma from the images (+inf, unseen, sorts last); NaN for no
 // vertex. The tests of LevelStartMesh and ChooseCoarseStart.
@@ -45,9 +55,16 @@ bool RemeshedDsmAtFullResolution(const RefineOptions& options, bool initial_is_m
 // (ResolveCreasePass). Tri-stereo 0.5 m seeds 1-4, against the 2-pixel remesh with its
 // crease pass (docs/benchmarks-history.md, session 36): roofs 0.318 / 0.332 / 0.322 / 0.277
 // -> 0.310 / 0.308 / 0.287 / 0.262 m, facades @0.5 m +0.2 to +1.2 points, F -0.1 to +0.3,
-// 0.6x the faces, the job 2.1x faster. One pair keeps coarse_edge_px: on the real Pléiades
-// pairs the held-out views' pairs fell with it (img_03's mean 0.78795 -> 0.78550), and on
-// synthetic stereo its roofs were mixed (s1 0.347 -> 0.351 m, s2 0.356 -> 0.346 m).
+// 0.6x the faces, the job 2.1x faster. One pair's start has 3.7-pixel triangles
+// (kOnePairFlatEdgeFactor), and those whose vertices the pair resolves to 2 GSD
+// (kOnePairResolvedSigmaGsd, LevelHeightSigma) are halved in the first round whatever the
+// initial surface does: large triangles where one pair does not constrain the height (walls
+// it sees at grazing incidence or not at all, occlusions, shadows), the 2-pixel density
+// where it does. With 4-pixel triangles everywhere the real Pléiades pairs' held-out views
+// fell (img_03's mean 0.78795 -> 0.78550): the flat parts of real images carry detail the
+// larger triangles do not hold. Stereo 0.5 m s1 / s2 / seed 51 (docs/benchmarks-history.md,
+// session 39): the job 1.6-1.7x faster, the accuracy within the runs' noise, the Pléiades
+// held-out pairs within 0.0002.
 bool AdaptiveStart(const RefineOptions& options, bool initial_is_mesh, int level) {
   return level == 0 && RemeshedDsmAtFullResolution(options, initial_is_mesh) &&
          options.initial_detail_gsd > 0 && options.flat_edge_px > options.coarse_edge_px;
@@ -116,8 +133,8 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
   if (level != 0 || options.grid_start > 0 || !(options.initial_detail_gsd > 0))
     return mesh;
   const double tolerance_m = options.initial_detail_gsd * gsd_m;
-  const double median =
-      MedianVertexSigma(LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh));
+  const std::vector<float> sigma = LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh);
+  const double median = MedianVertexSigma(sigma);
   if (median_sigma_m) *median_sigma_m = median;
   if (!(median > tolerance_m)) {
     spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex), within "
@@ -131,20 +148,29 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
   if (adaptive_taken) *adaptive_taken = adaptive;
   const RayScene initial(input.initial_mesh);  // after the test: a DSM mesh of millions of faces
   const int rounds = adaptive ? DetailRounds(options.flat_edge_px, options.coarse_edge_px) : 1;
+  std::vector<char> resolved;  // one pair's adaptive start: halved in the first round
+  if (adaptive && pairs.size() == 1)
+    resolved = FacesWithinSigma(mesh, sigma, kOnePairResolvedSigmaGsd * gsd_m);
   size_t subdivided = 0;
   const size_t faces_before = mesh.num_faces();
   for (int round = 0; round < rounds; ++round) {
     size_t marked = 0;
-    mesh = FollowInitialDetail(mesh, initial, tolerance_m, kInitialDetailReachGsd * gsd_m, &marked);
+    mesh = FollowInitialDetail(mesh, initial, tolerance_m, kInitialDetailReachGsd * gsd_m, &marked,
+                               round == 0 && !resolved.empty() ? &resolved : nullptr);
     subdivided += marked;
     if (marked == 0) break;
   }
   SortSpatially(&mesh);
   spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex): the "
                "{}-pixel mesh's {} faces subdivided in {} round(s) where the initial surface "
-               "departs from them by more than {:.2f} m ({} marked; {} faces)",
+               "departs from them by more than {:.2f} m{} ({} marked; {} faces)",
                median, adaptive ? options.flat_edge_px : options.coarse_edge_px, faces_before,
-               rounds, tolerance_m, subdivided, mesh.num_faces());
+               rounds, tolerance_m,
+               resolved.empty() ? std::string()
+                                : fmt::format(" or the pair resolves them ({} faces within {:.2f} m)",
+                                              std::count(resolved.begin(), resolved.end(), 1),
+                                              kOnePairResolvedSigmaGsd * gsd_m),
+               subdivided, mesh.num_faces());
   return mesh;
 }
 
@@ -192,9 +218,21 @@ int ChooseCoarseStart(const RefineInput& input, const RefineOptions& options,
 
 double ResolveFlatEdge(const RefineOptions& options, bool initial_is_mesh, size_t num_pairs) {
   if (options.flat_edge_px >= 0) return options.flat_edge_px;
-  return RemeshedDsmAtFullResolution(options, initial_is_mesh) && num_pairs > 1
-             ? 2 * options.coarse_edge_px
-             : options.coarse_edge_px;
+  if (!RemeshedDsmAtFullResolution(options, initial_is_mesh) || num_pairs == 0)
+    return options.coarse_edge_px;
+  return (num_pairs > 1 ? 2 : kOnePairFlatEdgeFactor) * options.coarse_edge_px;
+}
+
+std::vector<char> FacesWithinSigma(const TriangleMesh& mesh, const std::vector<float>& sigma,
+                                   double limit_m) {
+  std::vector<char> within(mesh.num_faces(), 0);
+  if (sigma.size() != mesh.num_vertices()) return within;
+  for (size_t f = 0; f < mesh.num_faces(); ++f) {
+    const Eigen::Vector3i& t = mesh.faces[f];
+    within[f] = sigma[size_t(t[0])] <= limit_m && sigma[size_t(t[1])] <= limit_m &&
+                sigma[size_t(t[2])] <= limit_m;
+  }
+  return within;
 }
 
 int DetailRounds(double flat_edge_px, double coarse_edge_px) {

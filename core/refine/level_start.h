@@ -47,9 +47,15 @@ int ChooseCoarseStart(const RefineInput& input, const RefineOptions& options,
 
 // RefineOptions::flat_edge_px resolved, after levels and grid_start are: -1 gives
 // 2 x coarse_edge_px to a DSM start remeshed at full resolution (no coarser level, grid_start
-// 0) with more than one pair, else coarse_edge_px (see level_start.cc, AdaptiveStart). Where
-// the images resolve the surface LevelStartMesh falls back to coarse_edge_px.
+// 0) with more than one pair, 1.85 x with one pair, else coarse_edge_px (see level_start.cc,
+// AdaptiveStart). Where the images resolve the surface LevelStartMesh falls back to
+// coarse_edge_px.
 double ResolveFlatEdge(const RefineOptions& options, bool initial_is_mesh, size_t num_pairs);
+
+// Per face of `mesh`, 1 where each of its vertices' `sigma` (per vertex, metres; +inf or NaN:
+// unconstrained) is at most limit_m: the faces one pair's adaptive start halves at once.
+std::vector<char> FacesWithinSigma(const TriangleMesh& mesh, const std::vector<float>& sigma,
+                                   double limit_m);
 
 // The number of times a start of flat_edge_px pixels is subdivided where the initial
 // surface departs from it: until its finest triangles are at most half of coarse_edge_px

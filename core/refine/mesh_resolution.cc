@@ -78,7 +78,8 @@ std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eige
 }
 
 TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surface,
-                                 double tolerance_m, double reach_m, size_t* subdivided) {
+                                 double tolerance_m, double reach_m, size_t* subdivided,
+                                 const std::vector<char>* also) {
   const size_t nf = mesh.num_faces();
   const std::vector<Eigen::Vector3f> normals = FaceNormals(mesh);
   std::vector<Eigen::Vector3f> points, directions;
@@ -97,6 +98,7 @@ TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surfa
   std::vector<char> marked(nf, 0);
   size_t count = 0;
   for (size_t f = 0; f < nf; ++f) {
+    if (also && (*also)[f]) marked[f] = 1;
     for (int k = 0; k < 4; ++k) {
       const float d = distance[4 * f + k];
       if (std::isfinite(d) && std::abs(d) > tolerance_m) marked[f] = 1;

@@ -41,9 +41,10 @@ std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eige
 // Along the normals, not vertically: a DSM's blurred wall measured vertically departs
 // everywhere, and pinning it to the DSM cost the 0.5 m scenes under overhangs
 // (docs/benchmarks-history.md, session 18). *subdivided (when not null): the number of
-// faces marked.
+// faces marked. also (when not null): per face, 1 to subdivide it whatever the departure.
 TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surface,
                                  double tolerance_m, double reach_m,
-                                 size_t* subdivided = nullptr);
+                                 size_t* subdivided = nullptr,
+                                 const std::vector<char>* also = nullptr);
 
 }  // namespace satmesh

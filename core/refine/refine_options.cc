@@ -91,7 +91,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "triangles' edge in pixels where the initial surface is planar, halved where the "
        "initial surface departs from them by more than initial_detail_gsd, down to half of "
        "coarse_edge_px; at most coarse_edge_px: off; -1: 2 x coarse_edge_px with more than "
-       "one pair, else off"},
+       "one pair, 1.85 x with one pair (its faces the pair resolves to 2 GSD halved at once), "
+       "else off"},
       {"grid_start", &R::grid_start, Range::In(-1, 1),
        "the coarse mesh of a DSM start: 1: the DSM's own grid at the level's triangle edge, the "
        "thin plate's umbrella weighing each neighbour by 1 / edge length, so the images form the "

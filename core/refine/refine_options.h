@@ -95,7 +95,8 @@ struct RefineOptions {
                                    // coarse_edge_px (a mesh whose resolution follows the
                                    // surface; level_start.cc, AdaptiveStart); at most
                                    // coarse_edge_px: off; -1: 2 x coarse_edge_px with more
-                                   // than one pair, else off
+                                   // than one pair, 1.85 x with one pair (its faces the pair
+                                   // resolves to 2 GSD halved at once), else off
   int grid_start = -1;             // the coarse mesh of a DSM start: 1: the DSM's own grid
                                    // at the level's triangle edge, the thin plate's
                                    // umbrella weighing each neighbour by 1 / edge length

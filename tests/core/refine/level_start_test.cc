@@ -31,15 +31,15 @@ TEST(LevelStart, DetailRoundsHalveTheFlatEdgeToHalfTheCoarseEdge) {
 }
 
 // flat_edge_px -1: twice coarse_edge_px for a DSM start remeshed without coarser levels and
-// with more than one pair; the level's edge for one pair, a mesh start, the grid start or
-// coarser levels; a value the user gives is kept.
+// with more than one pair, 1.85 times with one pair; the level's edge for a mesh start, the
+// grid start or coarser levels; a value the user gives is kept.
 TEST(LevelStart, TheFlatEdgeIsTwiceTheCoarseEdgeForARemeshedDsmStartWithPairs) {
   RefineOptions o;
   o.levels = 0;
   o.grid_start = 0;
   ASSERT_EQ(o.flat_edge_px, -1);
   EXPECT_EQ(ResolveFlatEdge(o, /*initial_is_mesh=*/false, 3), 2 * o.coarse_edge_px);
-  EXPECT_EQ(ResolveFlatEdge(o, false, 1), o.coarse_edge_px);
+  EXPECT_DOUBLE_EQ(ResolveFlatEdge(o, false, 1), 1.85 * o.coarse_edge_px);
   EXPECT_EQ(ResolveFlatEdge(o, true, 3), o.coarse_edge_px);
   RefineOptions grid = o, coarser = o, given = o;
   grid.grid_start = 1;
@@ -50,6 +50,22 @@ TEST(LevelStart, TheFlatEdgeIsTwiceTheCoarseEdgeForARemeshedDsmStartWithPairs) {
   EXPECT_EQ(ResolveFlatEdge(given, false, 1), 6);
   given.flat_edge_px = 0;
   EXPECT_EQ(ResolveFlatEdge(given, false, 3), 0);
+}
+
+// One pair's adaptive start halves at once the faces whose three vertices the pair
+// resolves to the limit (unseen vertices carry +inf, NaN counts as unresolved).
+TEST(LevelStart, FacesWithinSigmaNeedAllThreeVerticesWithinTheLimit) {
+  TriangleMesh mesh;
+  for (int i = 0; i < 5; ++i) mesh.vertices.emplace_back(float(i), float(i % 2), 0.f);
+  mesh.faces = {{0, 1, 2}, {1, 2, 3}, {2, 3, 4}, {0, 2, 4}};
+  const float inf = std::numeric_limits<float>::infinity();
+  const std::vector<float> sigma = {0.2f, 0.5f, 1.0f, 1.01f, inf};
+  EXPECT_EQ(FacesWithinSigma(mesh, sigma, 1.0), (std::vector<char>{1, 0, 0, 0}));
+  EXPECT_EQ(FacesWithinSigma(mesh, sigma, 2.0), (std::vector<char>{1, 1, 0, 0}));
+  std::vector<float> nan_sigma = sigma;
+  nan_sigma[0] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(FacesWithinSigma(mesh, nan_sigma, 2.0), (std::vector<char>{0, 1, 0, 0}));
+  EXPECT_EQ(FacesWithinSigma(mesh, {}, 2.0), (std::vector<char>(4, 0)));  // no sigma
 }
 
 // grid_start 1: a DSM start's coarse level is the DSM's own grid with cells of that
