@@ -7,6 +7,7 @@
 #include <limits>
 #include <random>
 
+#include "core/refine/coarse_mesh.h"
 #include "core/refine/level_start.h"
 #include "core/refine/refine.h"
 #include "core/refine/refine_level.h"
@@ -145,6 +146,57 @@ TEST(Refine, TheGridStartIsTakenWhereTheImagesResolveTheSurface) {
   const RefineResult one_pair = Refine(two, o);
   ASSERT_EQ(one_pair.pairs.size(), 1u);
   EXPECT_EQ(one_pair.grid_start, 0);
+}
+
+// One pair's adaptive start (flat_edge_px -1: 1.85 coarse edges): the faces the pair
+// resolves to 2 GSD are halved at once, the others keep the large triangles. The plane's
+// two views carry noise, so the pair does not resolve the median vertex to
+// initial_detail_gsd (the start is adaptive) but resolves most faces to 2 GSD: the start
+// has about 4x the faces of the large remesh. Where one of the views does not see the
+// surface (the second image cut to its left half) the pair resolves nothing and the start
+// keeps the remesh's faces: about 2.5x in all.
+TEST(Refine, OnePairsAdaptiveStartHalvesTheFacesThePairResolves) {
+  const testing::Plane plane;
+  RefineOptions o = SmallOptions();
+  o.levels = 0;
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;
+  const RefineInput clean = PlaneWithInitialSurfaces(plane, 0.0, 0.0);
+  const auto two_views = [&](bool half_seen) {
+    RefineInput two = clean;
+    two.views.resize(2);
+    std::mt19937 rng(11);
+    std::normal_distribution<float> noise(0.f, 150.f);  // texture: 1500 DN of range
+    for (auto& view : two.views)
+      for (float& px : view.image.pixels) px += noise(rng);
+    if (half_seen) {  // the second image's left half only
+      ImageF& image = two.views[1].image;
+      ImageF left(image.width / 2, image.height);
+      for (int row = 0; row < image.height; ++row)
+        for (int col = 0; col < left.width; ++col) left.at(col, row) = image.at(col, row);
+      image = std::move(left);
+    }
+    return two;
+  };
+  const RefineResult textured = Refine(two_views(false), o);
+  ASSERT_EQ(textured.pairs.size(), 1u);
+  ASSERT_TRUE(textured.adaptive_start);
+  RefineOptions resolved = o;
+  resolved.grid_start = 0;  // as Refine resolves it for one pair (ChooseCoarseStart)
+  const double flat_edge_m = ResolveFlatEdge(resolved, false, 1) * textured.gsd_m;
+  const TriangleMesh remesh =
+      RemeshIsotropic(clean.initial_mesh, {.target_edge_m = flat_edge_m, .crease_angle_deg = 60});
+  const int start_faces = textured.levels[0].num_faces;
+  std::printf("remesh at %.2f m: %zu faces; one pair's adaptive start: %d\n", flat_edge_m,
+              remesh.num_faces(), start_faces);
+  EXPECT_GT(start_faces, 3 * int(remesh.num_faces()));
+  EXPECT_LT(start_faces, 5 * int(remesh.num_faces()));
+
+  const RefineResult half = Refine(two_views(true), o);
+  ASSERT_TRUE(half.adaptive_start);
+  std::printf("the second view seeing half: %d\n", half.levels[0].num_faces);
+  EXPECT_GT(half.levels[0].num_faces, 1.8 * double(remesh.num_faces()));
+  EXPECT_LT(half.levels[0].num_faces, 3.2 * double(remesh.num_faces()));
 }
 
 // crease_pass -1: a DSM start without coarser levels and with more than one pair runs level
