@@ -104,8 +104,18 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 // a job instead of 10. One pair's 1-pixel triangles are its noise (stereo 0.5 m roofs 8%
 // worse, the real Pléiades pairs' held-out ZNCC lower): by default where more than one pair
 // was selected (tri-stereo 0.5 m s1 / s2 / s3 on the remesh: roofs 0.348 / 0.366 / 0.330 ->
-// 0.332 / 0.345 / 0.328 m, facades +0.8 to +1.6 points; ResolveCreasePass).
-void CreasePass(const LevelContext& ctx, TriangleMesh* mesh, RefineResult* result) {
+// 0.332 / 0.345 / 0.328 m, facades +0.8 to +1.6 points; ResolveCreasePass). The pass
+// continues level 0's result, it does not start from the initial surface: it takes
+// iterations_per_level, not the coarsest level's coarsest_iterations_factor times that
+// (multi-date 0.5 m s1 / s2 / s3 / seed 53, 40 -> 20 iterations: roofs -0.003 to +0.001 m,
+// facades -0.1 to -0.5 points, under overhangs -0.1 to -0.6, F equal or +0.2, the job
+// 0.8x the time; docs/benchmarks-history.md, session 39).
+void CreasePass(const LevelContext& level0, TriangleMesh* mesh, RefineResult* result) {
+  RefineOptions continued = level0.options;
+  continued.coarsest_iterations_factor = 1;
+  const LevelContext ctx{level0.input,   continued,   level0.progress,
+                         level0.sources, level0.pairs, level0.mean_pair_information,
+                         level0.gsd_m};
   const double tolerance_m = ctx.options.flat_tolerance_gsd * ctx.gsd_m;
   const size_t faces_before = mesh->num_faces();
   const size_t subdivided = SubdivideNearCreases(tolerance_m, mesh);

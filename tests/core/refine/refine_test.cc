@@ -141,9 +141,10 @@ TEST(Refine, AgreedMoveCarriesOnlyWhatBothMovesAgreeOn) {
 }
 
 // momentum (MomentumStep): a move every iteration agrees on is made in fewer iterations than
-// by plain steps, where the steps are below the clamp (a plane started 2 GSD off, one level,
-// no pull towards the start, a small step: the regime of weakly textured or weakly
-// constrained surfaces), and the iterations still settle it.
+// by plain steps, where the steps are below the clamp (a plane started 2 GSD off, one level
+// run once, no pull towards the start, a small step: the regime of weakly textured or weakly
+// constrained surfaces), and the iterations still settle it (64 steps: 0.07 m; the plain
+// steps 0.24 m).
 TEST(Refine, MomentumMakesAConsistentMoveInFewerIterations) {
   const testing::Plane plane;
   const auto input = testing::MakePlaneInput(plane, testing::DefaultViews(),
@@ -153,9 +154,10 @@ TEST(Refine, MomentumMakesAConsistentMoveInFewerIterations) {
   plain.initial_sigma_gsd = 0;
   plain.step = 0.1;
   plain.momentum = 0;
+  plain.crease_pass = 0;  // one run of level 0: coarsest_iterations_factor x the iterations
   RefineOptions heavy = plain;
   heavy.momentum = 0.5;
-  for (const int iterations : {10, 16}) {
+  for (const int iterations : {10, 32}) {
     plain.iterations_per_level = heavy.iterations_per_level = iterations;
     const double a = PlaneError(Refine(input, plain).mesh, plane, 30).first;
     const double b = PlaneError(Refine(input, heavy).mesh, plane, 30).first;
@@ -163,7 +165,7 @@ TEST(Refine, MomentumMakesAConsistentMoveInFewerIterations) {
     if (iterations == 10) {
       EXPECT_LT(b, 0.75 * a);  // the first two steps carry nothing
     }
-    if (iterations == 16) {
+    if (iterations == 32) {
       EXPECT_LT(b, 0.1);  // 0.2 GSD, as the tests above
     }
   }
