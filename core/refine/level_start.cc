@@ -161,16 +161,17 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
     if (marked == 0) break;
   }
   SortSpatially(&mesh);
-  spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex): the "
-               "{}-pixel mesh's {} faces subdivided in {} round(s) where the initial surface "
-               "departs from them by more than {:.2f} m{} ({} marked; {} faces)",
-               median, adaptive ? options.flat_edge_px : options.coarse_edge_px, faces_before,
-               rounds, tolerance_m,
-               resolved.empty() ? std::string()
-                                : fmt::format(" or the pair resolves them ({} faces within {:.2f} m)",
-                                              std::count(resolved.begin(), resolved.end(), 1),
-                                              kOnePairResolvedSigmaGsd * gsd_m),
-               subdivided, mesh.num_faces());
+  const std::string or_resolved =
+      resolved.empty() ? std::string()
+                       : fmt::format(" or the pair resolves them ({} faces within {:.2f} m)",
+                                     std::count(resolved.begin(), resolved.end(), 1),
+                                     kOnePairResolvedSigmaGsd * gsd_m);
+  spdlog::info(
+      "level 0: the images resolve the surface to {:.2f} m (median vertex): the "
+      "{}-pixel mesh's {} faces subdivided in {} round(s) where the initial surface "
+      "departs from them by more than {:.2f} m{} ({} marked; {} faces)",
+      median, adaptive ? options.flat_edge_px : options.coarse_edge_px, faces_before, rounds,
+      tolerance_m, or_resolved, subdivided, mesh.num_faces());
   return mesh;
 }
 

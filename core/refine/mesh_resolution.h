@@ -43,8 +43,7 @@ std::vector<float> DistanceAlong(const RayScene& surface, const std::vector<Eige
 // (docs/benchmarks-history.md, session 18). *subdivided (when not null): the number of
 // faces marked. also (when not null): per face, 1 to subdivide it whatever the departure.
 TriangleMesh FollowInitialDetail(const TriangleMesh& mesh, const RayScene& surface,
-                                 double tolerance_m, double reach_m,
-                                 size_t* subdivided = nullptr,
+                                 double tolerance_m, double reach_m, size_t* subdivided = nullptr,
                                  const std::vector<char>* also = nullptr);
 
 }  // namespace satmesh

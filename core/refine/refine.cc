@@ -113,7 +113,7 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 void CreasePass(const LevelContext& level0, TriangleMesh* mesh, RefineResult* result) {
   RefineOptions continued = level0.options;
   continued.coarsest_iterations_factor = 1;
-  const LevelContext ctx{level0.input,   continued,   level0.progress,
+  const LevelContext ctx{level0.input,   continued,    level0.progress,
                          level0.sources, level0.pairs, level0.mean_pair_information,
                          level0.gsd_m};
   const double tolerance_m = ctx.options.flat_tolerance_gsd * ctx.gsd_m;
