@@ -63,8 +63,8 @@ bool RemeshedDsmAtFullResolution(const RefineOptions& options, bool initial_is_m
 // where it does. With 4-pixel triangles everywhere the real Pléiades pairs' held-out views
 // fell (img_03's mean 0.78795 -> 0.78550): the flat parts of real images carry detail the
 // larger triangles do not hold. Stereo 0.5 m s1 / s2 / seed 51 (docs/benchmarks-history.md,
-// session 39): the job 1.6-1.7x faster, the accuracy within the runs' noise, the Pléiades
-// held-out pairs within 0.0002.
+// session 39): the job in 0.6-0.7x the time, the accuracy within the runs' noise, the
+// Pléiades held-out pairs within 0.0002.
 bool AdaptiveStart(const RefineOptions& options, bool initial_is_mesh, int level) {
   return level == 0 && RemeshedDsmAtFullResolution(options, initial_is_mesh) &&
          options.initial_detail_gsd > 0 && options.flat_edge_px > options.coarse_edge_px;
