@@ -105,9 +105,9 @@ double MeasurePass(const RefineInput& input, const std::vector<PreparedView>& so
   if (information) information->assign(mesh.num_vertices(), 0.0);
   // (only the information is gathered, from the vertices' faces)
   const VertexAdjacency adjacency = information ? BuildVertexAdjacency(mesh) : VertexAdjacency{};
-  return PhotometricPass(views, slot, pairs, mesh, normals, adjacency, photo, &scratch, nullptr,
-                         nullptr,
-                         /*one_direction=*/-1, information, nullptr, windows);
+  return PhotometricPass(views, slot, pairs, mesh, normals, adjacency, photo, &scratch,
+                         /*gradient=*/nullptr, /*seen=*/nullptr, /*one_direction=*/-1,
+                         information, nullptr, windows);
 }
 
 }  // namespace
@@ -334,15 +334,12 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     std::fill(gradient.begin(), gradient.end(), Eigen::Vector3d::Zero());
     std::fill(seen.begin(), seen.end(), 0);
     if (it == information_from && it > 0) std::fill(information.begin(), information.end(), 0.0);
-    const double zncc = PhotometricPass(views, slot, group_pairs, *mesh, normals, adjacency, photo,
-                                        &scratch,
-                                        measure_only ? nullptr : &gradient,
-                                        measure_only ? nullptr : &seen, one_direction,
-                                        (it == 0 && (data_confidence || initial_prior)) ||
-                                                final_information
-                                            ? &information
-                                            : nullptr,
-                                        it == 0 && groups > 1 ? &first_energies : nullptr);
+    const double zncc = PhotometricPass(
+        views, slot, group_pairs, *mesh, normals, adjacency, photo, &scratch,
+        measure_only ? nullptr : &gradient, measure_only ? nullptr : &seen, one_direction,
+        (it == 0 && (data_confidence || initial_prior)) || final_information ? &information
+                                                                             : nullptr,
+        it == 0 && groups > 1 ? &first_energies : nullptr);
     if (it == 0 && data_confidence)
       confidence = HeightConfidenceFromInformation(information, noise_variance, gsd, opt, &stats);
     if (it == 0 && initial_prior)
