@@ -164,17 +164,46 @@ LevelMeasure MeasureLevel(const RefineInput& input, const std::vector<PreparedVi
                           /*sunlit=*/true);
 }
 
-int PairGroups(int num_pairs, const RefineOptions& options) {
-  return options.pairs_per_iteration > 0
-             ? std::max(1, (num_pairs + options.pairs_per_iteration - 1) / options.pairs_per_iteration)
-             : 1;
+int PairGroups(const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options) {
+  if (options.pairs_per_iteration <= 0) return 1;
+  std::vector<int> views;
+  for (const auto& [i, j] : pairs) views.push_back(i), views.push_back(j);
+  std::sort(views.begin(), views.end());
+  const int num_views = int(std::unique(views.begin(), views.end()) - views.begin());
+  const int per_group = std::max(options.pairs_per_iteration, (num_views + 1) / 2);
+  return std::max(1, (int(pairs.size()) + per_group - 1) / per_group);
 }
 
 namespace {
-// The indices of the pairs in `group`: k with k mod groups == group.
-std::vector<size_t> PairGroupIndices(size_t num_pairs, int groups, int group) {
+// The indices of the pairs in `group`. In list order, each pair joins the group (of those
+// with room: ceil(pairs / groups) each) where its two views have the fewest pairs so far,
+// then the smallest, then the first: each group spreads over the views. (Pair k in group
+// k mod groups left a view out of a group: multi-date 0.5 m's 10 pairs of 6 views in 2
+// groups, facades 0.4-0.6 points below every pair every iteration; balanced, within the
+// runs' spread; docs/benchmarks-history.md, session 40.)
+std::vector<size_t> PairGroupIndices(const std::vector<std::pair<int, int>>& pairs, int groups,
+                                     int group) {
+  const size_t room = (pairs.size() + size_t(groups) - 1) / size_t(groups);
+  int num_views = 0;
+  for (const auto& [i, j] : pairs) num_views = std::max({num_views, i + 1, j + 1});
+  std::vector<std::vector<int>> uses(groups, std::vector<int>(num_views, 0));
+  std::vector<size_t> size(groups, 0);
   std::vector<size_t> out;
-  for (size_t k = size_t(group); k < num_pairs; k += size_t(groups)) out.push_back(k);
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    const auto [i, j] = pairs[k];
+    int best = -1;
+    for (int g = 0; g < groups; ++g) {
+      if (size[g] >= room) continue;
+      if (best < 0) {
+        best = g;
+        continue;
+      }
+      const int a = uses[g][i] + uses[g][j], b = uses[best][i] + uses[best][j];
+      if (a < b || (a == b && size[g] < size[best])) best = g;
+    }
+    ++size[best], ++uses[best][i], ++uses[best][j];
+    if (best == group) out.push_back(k);
+  }
   return out;
 }
 }  // namespace
@@ -182,13 +211,13 @@ std::vector<size_t> PairGroupIndices(size_t num_pairs, int groups, int group) {
 std::vector<std::pair<int, int>> PairGroup(const std::vector<std::pair<int, int>>& pairs,
                                            int groups, int group) {
   std::vector<std::pair<int, int>> out;
-  for (size_t k : PairGroupIndices(pairs.size(), groups, group)) out.push_back(pairs[k]);
+  for (size_t k : PairGroupIndices(pairs, groups, group)) out.push_back(pairs[k]);
   return out;
 }
 
 std::vector<std::pair<int, int>> InitialCheckPairs(const std::vector<std::pair<int, int>>& pairs,
                                                    const RefineOptions& options) {
-  return PairGroup(pairs, PairGroups(int(pairs.size()), options), 0);
+  return PairGroup(pairs, PairGroups(pairs, options), 0);
 }
 
 bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, TriangleMesh* mesh,
@@ -262,7 +291,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // group's step is a noisier one, and the surface ends where all pairs agree (the jax set
   // at 300 m, 39 pairs in 3 groups, plain steps: roofs NMAD 0.058 m without, 0.054 m with 6,
   // as with every pair every iteration; docs/benchmarks-history.md, sessions 23 and 33).
-  const int groups = PairGroups(int(ctx.pairs.size()), opt);
+  const int groups = PairGroups(ctx.pairs, opt);
   std::vector<std::pair<int, int>> group_pairs;
   std::vector<PairEnergy> first_energies;  // the first iteration's, per pair-direction
   std::vector<HitMapUpdate> update(views.size());
@@ -354,7 +383,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       if (groups > 1) {
         double sum = 0;
         long count = 0;
-        for (size_t k : PairGroupIndices(ctx.pairs.size(), groups, 0))
+        for (size_t k : PairGroupIndices(ctx.pairs, groups, 0))
           for (size_t d : {2 * k, 2 * k + 1})
             sum += first_energies[d].sum_zncc, count += first_energies[d].num_windows;
         stats.check_zncc = count > 0 ? sum / double(count) : 0.0;

@@ -22,17 +22,18 @@ struct LevelContext {
   double gsd_m;
 };
 
-// pairs_per_iteration: `pairs` fall into PairGroups groups of at most that many (one
-// when it is 0), pair k into group k mod groups. A level's middle iterations take the
-// groups in turn (RefineLevel); the initial surface is measured on group 0 alone
+// pairs_per_iteration: `pairs` fall into PairGroups groups (one when it is 0) of at least
+// that many pairs and at least half as many as the views they join (so that a group can
+// see every view), spread over the views (PairGroupIndices). A level's middle iterations
+// take the groups in turn (RefineLevel); the initial surface is measured on group 0 alone
 // (InitialCheckPairs).
-int PairGroups(int num_pairs, const RefineOptions& options);
+int PairGroups(const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options);
 std::vector<std::pair<int, int>> PairGroup(const std::vector<std::pair<int, int>>& pairs,
                                            int groups, int group);
 
 // The pairs a level below the coarsest compares the initial surface and the previous
 // level's result on (refine.cc, CoarseToFine): group 0, a sample spread over the selection
-// (every groups-th pair in view order). Measuring the initial surface, a grid mesh
+// and its views. Measuring the initial surface, a grid mesh
 // of about twice the level's faces, on every pair of a 26-view set cost 9% of the large
 // job; a margin of 0.08 in ZNCC there, ties within 0.001 on the Pléiades triplet (3
 // pairs: one group).

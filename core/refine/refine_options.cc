@@ -113,7 +113,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "directions every iteration"},
       {"pairs_per_iteration", &R::pairs_per_iteration, Range::AtLeast(0),
        "> 0: a level's iterations other than its first and its last few take the pairs in "
-       "turn, this many at most; 0: every pair every iteration"},
+       "turn, in groups of at least this many and at least half as many as the views; 0: "
+       "every pair every iteration"},
       {"normalize_by_pair_count", &R::normalize_by_pair_count, {},
        "each vertex's photometric gradient is divided by the number of pair-directions that saw it"},
       {"min_height_confidence", &R::min_height_confidence, Range::AboveTo(0, 1),

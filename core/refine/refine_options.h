@@ -128,13 +128,15 @@ struct RefineOptions {
                                      // direction per pair, alternating (half the work;
                                      // same accuracy on synthetic scenes, BENCHMARKS.md);
                                      // false: both directions every iteration (the paper)
-  int pairs_per_iteration = 16;    // > 0: a level's iterations other than its first and
-                                   // its last few take the pairs in turn, this many at most
-                                   // (pair k in group k mod ceil(pairs / this)), and only
-                                   // their views' hit maps are made or followed: a large
-                                   // view set's pairs see the same surface many times over
-                                   // (refine_level.cc, kEveryPairAtTheEnd); 0: every pair
-                                   // every iteration
+  int pairs_per_iteration = 5;     // > 0: a level's iterations other than its first and
+                                   // its last few take the pairs in turn, in groups of at
+                                   // least this many and at least half as many as the
+                                   // views (refine_level.h, PairGroups), and only their
+                                   // views' hit maps are made or followed: a view set with
+                                   // many pairs sees the same surface many times over
+                                   // (refine_level.cc, kEveryPairAtTheEnd; multi-date 0.5
+                                   // m, 10 pairs in 2 groups: 0.85x the time, history
+                                   // session 40); 0: every pair every iteration
   bool normalize_by_pair_count = true;  // divide each vertex's photometric gradient by the
                                         // number of pair-directions that saw it (OpenMVS)
   double min_height_confidence = 0.1;  // floor of a vertex's height confidence (see

@@ -3,9 +3,11 @@
 // CoarseToFine).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <set>
 
 #include "core/refine/coarse_mesh.h"
 #include "core/refine/level_start.h"
@@ -302,19 +304,53 @@ TEST(Refine, RestartsFromTheInitialSurfaceWhenItExplainsTheImagesBetter) {
   EXPECT_GT(PlaneError(chained.mesh, plane, 30).first, 0.5);  // still metres off
 }
 
-TEST(PairGroups, PairKIsInGroupKModGroupsAndTheCheckTakesGroupZero) {
-  std::vector<std::pair<int, int>> pairs;
-  for (int k = 0; k < 7; ++k) pairs.push_back({k, k + 1});
+// Groups of at least pairs_per_iteration pairs and at least half as many as the views.
+TEST(PairGroups, GroupsHoldAtLeastHalfAsManyPairsAsViews) {
+  std::vector<std::pair<int, int>> chain;  // 7 pairs of 8 views
+  for (int k = 0; k < 7; ++k) chain.push_back({k, k + 1});
   RefineOptions o;
-  o.pairs_per_iteration = 3;
-  EXPECT_EQ(PairGroups(7, o), 3);
-  EXPECT_EQ(PairGroup(pairs, 3, 1), (std::vector<std::pair<int, int>>{{1, 2}, {4, 5}}));
-  EXPECT_EQ(InitialCheckPairs(pairs, o), (std::vector<std::pair<int, int>>{{0, 1}, {3, 4}, {6, 7}}));
+  o.pairs_per_iteration = 2;  // 8 views: groups of 4
+  EXPECT_EQ(PairGroups(chain, o), 2);
   o.pairs_per_iteration = 7;  // one group: every pair
-  EXPECT_EQ(PairGroups(7, o), 1);
-  EXPECT_EQ(InitialCheckPairs(pairs, o), pairs);
+  EXPECT_EQ(PairGroups(chain, o), 1);
+  EXPECT_EQ(InitialCheckPairs(chain, o), chain);
   o.pairs_per_iteration = 0;
-  EXPECT_EQ(InitialCheckPairs(pairs, o), pairs);
+  EXPECT_EQ(PairGroups(chain, o), 1);
+  EXPECT_EQ(InitialCheckPairs(chain, o), chain);
+  // 39 pairs of 26 views (a jax set): groups of 13 at the default 5.
+  std::vector<std::pair<int, int>> many;
+  for (int k = 0; k < 39; ++k) many.push_back({k % 26, (k + 1 + k / 26) % 26});
+  EXPECT_EQ(PairGroups(many, RefineOptions{}), 3);
+  // 10 pairs of 6 views: groups of 5.
+  const std::vector<std::pair<int, int>> six = {{0, 1}, {0, 3}, {0, 4}, {0, 5}, {1, 2},
+                                                {1, 3}, {1, 4}, {1, 5}, {2, 3}, {2, 4}};
+  EXPECT_EQ(PairGroups(six, RefineOptions{}), 2);
+}
+
+// A multi-date set's 10 pairs of 6 views (the pair list of synth multidate 0.5 m seed 1)
+// in 2 groups: each group has 5 pairs and sees every view (pair k in group k mod 2 left
+// view 5 out of group 0); the initial surface check takes group 0.
+TEST(PairGroups, EachGroupSpreadsOverTheViews) {
+  const std::vector<std::pair<int, int>> pairs = {{0, 1}, {0, 3}, {0, 4}, {0, 5}, {1, 2},
+                                                  {1, 3}, {1, 4}, {1, 5}, {2, 3}, {2, 4}};
+  std::vector<int> in_group(pairs.size(), -1);
+  for (int g = 0; g < 2; ++g) {
+    const auto group = PairGroup(pairs, 2, g);
+    EXPECT_EQ(group.size(), 5u) << "group " << g;
+    std::set<int> views;
+    for (const auto& [i, j] : group) views.insert(i), views.insert(j);
+    EXPECT_EQ(views.size(), 6u) << "group " << g;
+    for (const auto& p : group) {
+      const size_t k = size_t(std::find(pairs.begin(), pairs.end(), p) - pairs.begin());
+      ASSERT_LT(k, pairs.size());
+      EXPECT_EQ(in_group[k], -1) << "pair in two groups";
+      in_group[k] = g;
+    }
+  }
+  EXPECT_EQ(std::count(in_group.begin(), in_group.end(), -1), 0);
+  RefineOptions o;
+  o.pairs_per_iteration = 5;
+  EXPECT_EQ(InitialCheckPairs(pairs, o), PairGroup(pairs, 2, 0));
 }
 
 // With the pairs in groups, the initial surface is measured on group 0 alone and the
@@ -328,7 +364,7 @@ TEST(Refine, TheInitialSurfaceCheckComparesOnePairGroup) {
   RefineOptions o = SmallOptions();
   o.iterations_per_level = 1;
   o.coarsest_iterations_factor = 1;
-  o.pairs_per_iteration = 1;  // 3 pairs: 3 groups, the check on the first pair only
+  o.pairs_per_iteration = 1;  // 3 pairs of 3 views: 2 groups, the check on group 0's 2 pairs
   const RefineResult result = Refine(input, o);
   ASSERT_EQ(result.pairs.size(), 3u);
   ASSERT_EQ(result.levels.size(), 3u);
