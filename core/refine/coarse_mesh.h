@@ -18,7 +18,10 @@ constexpr double kDsmCreaseAngleDeg = 60;
 
 struct CoarseMeshOptions {
   double target_edge_m = 2.0;  // target edge length, metres, > 0
-  int iterations = 3;          // CGAL isotropic remeshing iterations, [1, 20]
+  int iterations = 2;          // CGAL isotropic remeshing iterations, [1, 20] (3 before
+                               // session 40: stereo 0.5 m 0.93-0.95x the time with 2, eight
+                               // stereo / tri-stereo scenes at 0.3 and 0.5 m within 2% of
+                               // roofs and 0.3 points, the Pléiades pairs within 0.0001)
   // A mesh of more faces is remeshed in blocks of about this many, in parallel (their
   // borders kept, then the band around the borders remeshed in pieces, also in parallel);
   // >= 1000. A block's remesh costs more per face the larger the block (stereo 0.5 m, 179k
