@@ -179,7 +179,7 @@ namespace {
 // with room: ceil(pairs / groups) each) where its two views have the fewest pairs so far,
 // then the smallest, then the first: each group spreads over the views. (Pair k in group
 // k mod groups left a view out of a group: multi-date 0.5 m's 10 pairs of 6 views in 2
-// groups, facades 0.4-0.6 points below every pair every iteration; balanced, within the
+// groups, facades 0.4-1.0 points below every pair every iteration; balanced, within the
 // runs' spread; docs/benchmarks-history.md, session 40.)
 std::vector<size_t> PairGroupIndices(const std::vector<std::pair<int, int>>& pairs, int groups,
                                      int group) {
