@@ -136,10 +136,17 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
   const std::vector<float> sigma = LevelHeightSigma(input, views, pairs, options, gsd_m, 0, mesh);
   const double median = MedianVertexSigma(sigma);
   if (median_sigma_m) *median_sigma_m = median;
-  if (!(median > tolerance_m)) {
-    spdlog::info("level 0: the images resolve the surface to {:.2f} m (median vertex), within "
-                 "{:.2f} m: the coarse mesh is kept at {} pixels",
-                 std::isnan(median) ? 0.0 : median, tolerance_m, options.coarse_edge_px);
+  // The test is at the level's own triangles (coarse_edge_px): a vertex of a remesh N times
+  // as large averages N times the pixels across, its sigma about 1/N (stereo 0.5 m:
+  // 1/N^1.6 from 3.7 to 6 pixels, so the test leans to "resolved" on larger starts).
+  const double edge_px = adaptive ? options.flat_edge_px : options.coarse_edge_px;
+  const double level_median = median * edge_px / options.coarse_edge_px;
+  if (!(level_median > tolerance_m)) {
+    spdlog::info("level 0: the images resolve the surface to {:.2f} m at {}-pixel triangles "
+                 "(median vertex; {:.2f} m on the {}-pixel mesh), within {:.2f} m: the coarse "
+                 "mesh is kept at {} pixels",
+                 std::isnan(median) ? 0.0 : level_median, options.coarse_edge_px,
+                 std::isnan(median) ? 0.0 : median, edge_px, tolerance_m, options.coarse_edge_px);
     // they form the detail themselves, on the level's own triangles
     if (adaptive)
       mesh = RemeshForLevel(input, input.initial_mesh, options, gsd_m, level, progress, grid_cell_m);
@@ -167,10 +174,10 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
                                      std::count(resolved.begin(), resolved.end(), 1),
                                      kOnePairResolvedSigmaGsd * gsd_m);
   spdlog::info(
-      "level 0: the images resolve the surface to {:.2f} m (median vertex): the "
-      "{}-pixel mesh's {} faces subdivided in {} round(s) where the initial surface "
-      "departs from them by more than {:.2f} m{} ({} marked; {} faces)",
-      median, adaptive ? options.flat_edge_px : options.coarse_edge_px, faces_before, rounds,
+      "level 0: the images resolve the surface to {:.2f} m at {}-pixel triangles (median "
+      "vertex; {:.2f} m on the {}-pixel mesh): its {} faces subdivided in {} round(s) where "
+      "the initial surface departs from them by more than {:.2f} m{} ({} marked; {} faces)",
+      level_median, options.coarse_edge_px, median, edge_px, faces_before, rounds,
       tolerance_m, or_resolved, subdivided, mesh.num_faces());
   return mesh;
 }

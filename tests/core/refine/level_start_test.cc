@@ -201,6 +201,38 @@ TEST(Refine, OnePairsAdaptiveStartHalvesTheFacesThePairResolves) {
   EXPECT_LT(half.levels[0].num_faces, 3.2 * double(remesh.num_faces()));
 }
 
+// Whether the images resolve the surface (LevelStartMesh's test) is decided at the level's
+// own triangles, not at flat_edge_px's: a vertex of a larger remesh averages more pixels,
+// so measured on it the same pair and surface would pass the test from some size on (the
+// 3.7-pixel start at 0.16 m, a 6-pixel one at 0.10 m on the real Pleiades pair 01-02) and
+// the start would fall back to the uniform 2-pixel mesh. Here, with a tolerance of 0.35 m,
+// the pair's median vertex is at 0.48 m on the default 3.7-pixel start and 0.24 m on an
+// 8-pixel one (0.9 and 0.95 m at 2 pixels): both starts are adaptive, the larger with
+// fewer faces.
+TEST(Refine, WhetherThePairResolvesTheSurfaceDoesNotDependOnTheFlatEdge) {
+  const testing::Plane plane;
+  RefineOptions o = SmallOptions();
+  o.levels = 0;
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;
+  o.initial_detail_gsd = 0.7;
+  RefineInput two = PlaneWithInitialSurfaces(plane, 0.0, 0.0);
+  two.views.resize(2);
+  std::mt19937 rng(11);
+  std::normal_distribution<float> noise(0.f, 110.f);
+  for (auto& view : two.views)
+    for (float& px : view.image.pixels) px += noise(rng);
+  const RefineResult by_default = Refine(two, o);
+  ASSERT_EQ(by_default.pairs.size(), 1u);
+  EXPECT_TRUE(by_default.adaptive_start);
+  o.flat_edge_px = 4 * o.coarse_edge_px;
+  const RefineResult larger = Refine(two, o);
+  EXPECT_TRUE(larger.adaptive_start);
+  std::printf("faces: default start %d, 8-pixel start %d\n", by_default.levels[0].num_faces,
+              larger.levels[0].num_faces);
+  EXPECT_LT(larger.levels[0].num_faces, by_default.levels[0].num_faces);
+}
+
 // crease_pass -1: a DSM start without coarser levels and with more than one pair runs level
 // 0 again with the faces near its creases subdivided (on the plane: near its boundary only,
 // the planar interior keeps its triangles); its progress keeps rising to 1; one pair runs
