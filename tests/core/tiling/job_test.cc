@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <unistd.h>
@@ -368,6 +369,22 @@ TEST_F(TiledJob, OneTileJobMatchesTheWholeDsm) {
   EXPECT_GT(o.refine.mesh.num_faces(), 0u);  // single-tile jobs keep the mesh (bench)
   EXPECT_EQ(o.view_names.size(), 3u);
   EXPECT_TRUE(o.assembly.seams.empty());
+  // The job's files are the tile's (copied: AssembleOutputs' one-tile path), with its counts.
+  const auto bytes = [](const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(bytes(o.assembly.mesh_path), bytes(fs::path(out) / TilePiecePath(o.plan.tiles[0])));
+  const TriangleMesh mesh = ReadMesh(o.assembly.mesh_path);
+  EXPECT_EQ(mesh.num_faces(), o.tiles[0].core_faces);
+  EXPECT_EQ(o.assembly.faces, o.tiles[0].core_faces);
+  EXPECT_EQ(o.assembly.vertices, mesh.num_vertices());
+  EXPECT_EQ(mesh.height_sigma.size(), mesh.num_vertices());
+  const Dsm dsm = ReadDsm(o.assembly.dsm_path);
+  EXPECT_EQ(dsm.width, o.plan.aoi_cells.width);
+  EXPECT_EQ(dsm.height, o.plan.aoi_cells.height);
+  ASSERT_FALSE(o.assembly.confidence_path.empty());
+  EXPECT_EQ(ReadDsm(o.assembly.confidence_path).width, dsm.width);
   // Running the tile again is harmless (same files, atomically replaced).
   const TileResult again = RunTile(spec, o.plan, 0, out);
   EXPECT_TRUE(again.ok) << again.error;
