@@ -47,7 +47,8 @@ bool RemeshedDsmAtFullResolution(const RefineOptions& options, bool initial_is_m
 // AdaptiveStart: a DSM start remeshed at full resolution (no coarser level, grid_start 0,
 // initial_detail_gsd on) gets triangles of flat_edge_px (resolved: ResolveFlatEdge; 4
 // pixels from two pairs on) instead of coarse_edge_px where the initial surface is planar,
-// and FollowInitialDetail halves them DetailRounds times (to 1 pixel) where the initial
+// and FollowInitialDetail halves them DetailRounds times (to 1 pixel; one pair: to the
+// level's 2 pixels) where the initial
 // surface departs from them: a mesh whose resolution follows the surface, large on roofs,
 // streets and planar walls, fine at roof edges, wall feet and small structures. The larger
 // flat triangles average more pixels; the creases get 1-2 pixel triangles from the start,
@@ -64,7 +65,12 @@ bool RemeshedDsmAtFullResolution(const RefineOptions& options, bool initial_is_m
 // fell (img_03's mean 0.78795 -> 0.78550): the flat parts of real images carry detail the
 // larger triangles do not hold. Stereo 0.5 m s1 / s2 / seed 51 (docs/benchmarks-history.md,
 // session 39): the job in 0.6-0.7x the time, the accuracy within the runs' noise, the
-// Pléiades held-out pairs within 0.0002.
+// Pléiades held-out pairs within 0.0002. One pair's start is subdivided once (DetailRounds:
+// 3.7 -> 1.85 pixels where the initial surface departs), not down to 0.9 pixels: one pass
+// sees a wall from at most one side, at grazing incidence; the second round cost stereo
+// 0.5 m (6 seeds) 0.83x the job's time for F +0.1 to +0.3 and facades 0 to +0.2 points,
+// roofs and under overhangs within the runs' noise, the Pleiades held-out pairs within
+// 0.0002 (docs/benchmarks-history.md, session 41).
 bool AdaptiveStart(const RefineOptions& options, bool initial_is_mesh, int level) {
   return level == 0 && RemeshedDsmAtFullResolution(options, initial_is_mesh) &&
          options.initial_detail_gsd > 0 && options.flat_edge_px > options.coarse_edge_px;
@@ -154,7 +160,8 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
   }
   if (adaptive_taken) *adaptive_taken = adaptive;
   const RayScene initial(input.initial_mesh);  // after the test: a DSM mesh of millions of faces
-  const int rounds = adaptive ? DetailRounds(options.flat_edge_px, options.coarse_edge_px) : 1;
+  const int rounds =
+      adaptive ? DetailRounds(options.flat_edge_px, options.coarse_edge_px, pairs.size()) : 1;
   std::vector<char> resolved;  // one pair's adaptive start: halved in the first round
   if (adaptive && pairs.size() == 1)
     resolved = FacesWithinSigma(mesh, sigma, kOnePairResolvedSigmaGsd * gsd_m);
@@ -243,9 +250,10 @@ std::vector<char> FacesWithinSigma(const TriangleMesh& mesh, const std::vector<f
   return within;
 }
 
-int DetailRounds(double flat_edge_px, double coarse_edge_px) {
+int DetailRounds(double flat_edge_px, double coarse_edge_px, size_t num_pairs) {
+  const double finest_px = num_pairs > 1 ? coarse_edge_px / 2 : coarse_edge_px;
   int rounds = 1;
-  for (double edge = flat_edge_px / 2; edge > 0.505 * coarse_edge_px; edge /= 2) ++rounds;
+  for (double edge = flat_edge_px / 2; edge > 1.01 * finest_px; edge /= 2) ++rounds;
   return rounds;
 }
 

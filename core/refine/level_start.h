@@ -59,7 +59,8 @@ std::vector<char> FacesWithinSigma(const TriangleMesh& mesh, const std::vector<f
 
 // The number of times a start of flat_edge_px pixels is subdivided where the initial
 // surface departs from it: until its finest triangles are at most half of coarse_edge_px
-// (at least once). 4 and 2 pixels: 2 (4 -> 2 -> 1 pixel); 2 and 2: 1.
-int DetailRounds(double flat_edge_px, double coarse_edge_px);
+// (one pair: coarse_edge_px), at least once. 4 and 2 pixels: 2 (4 -> 2 -> 1 pixel); 2 and
+// 2: 1; one pair's 3.7 and 2: 1 (3.7 -> 1.85).
+int DetailRounds(double flat_edge_px, double coarse_edge_px, size_t num_pairs);
 
 }  // namespace satmesh

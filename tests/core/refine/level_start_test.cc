@@ -24,13 +24,17 @@ using testing::SmallOptions;
 using testing::SmallOptionsTwoPairs;
 
 // flat_edge_px: a start of 4 pixels is halved twice where the initial surface departs from
-// it (4 -> 2 -> 1 pixel, as the 2-pixel remesh is halved once); 2 once; 8 three times.
+// it (4 -> 2 -> 1 pixel, as the 2-pixel remesh is halved once); 2 once; 8 three times. One
+// pair's start is halved to the coarse edge: 3.7 once, 8 twice (8 -> 4 -> 2).
 TEST(LevelStart, DetailRoundsHalveTheFlatEdgeToHalfTheCoarseEdge) {
-  EXPECT_EQ(DetailRounds(4, 2), 2);
-  EXPECT_EQ(DetailRounds(2, 2), 1);
-  EXPECT_EQ(DetailRounds(8, 2), 3);
-  EXPECT_EQ(DetailRounds(3, 2), 2);  // 3 -> 1.5 -> 0.75
-  EXPECT_EQ(DetailRounds(1, 2), 1);
+  EXPECT_EQ(DetailRounds(4, 2, 3), 2);
+  EXPECT_EQ(DetailRounds(2, 2, 3), 1);
+  EXPECT_EQ(DetailRounds(8, 2, 3), 3);
+  EXPECT_EQ(DetailRounds(3, 2, 3), 2);  // 3 -> 1.5 -> 0.75
+  EXPECT_EQ(DetailRounds(1, 2, 3), 1);
+  EXPECT_EQ(DetailRounds(3.7, 2, 1), 1);
+  EXPECT_EQ(DetailRounds(8, 2, 1), 2);
+  EXPECT_EQ(DetailRounds(2, 2, 1), 1);
 }
 
 // flat_edge_px -1: twice coarse_edge_px for a DSM start remeshed without coarser levels and
