@@ -23,6 +23,15 @@ using testing::PlaneWithInitialSurfaces;
 using testing::SmallOptions;
 using testing::SmallOptionsTwoPairs;
 
+// SmallOptions with one iteration at full resolution (no coarser level): what a start is.
+RefineOptions OneIterationAtFullResolution() {
+  RefineOptions o = SmallOptions();
+  o.levels = 0;
+  o.iterations_per_level = 1;
+  o.coarsest_iterations_factor = 1;
+  return o;
+}
+
 // flat_edge_px: a start of 4 pixels is halved twice where the initial surface departs from
 // it (4 -> 2 -> 1 pixel, as the 2-pixel remesh is halved once); 2 once; 8 three times. One
 // pair's start is halved to the coarse edge: 3.7 once, 8 twice (8 -> 4 -> 2).
@@ -163,10 +172,7 @@ TEST(Refine, TheGridStartIsTakenWhereTheImagesResolveTheSurface) {
 // keeps the remesh's faces: about 2.5x in all.
 TEST(Refine, OnePairsAdaptiveStartHalvesTheFacesThePairResolves) {
   const testing::Plane plane;
-  RefineOptions o = SmallOptions();
-  o.levels = 0;
-  o.iterations_per_level = 1;
-  o.coarsest_iterations_factor = 1;
+  RefineOptions o = OneIterationAtFullResolution();
   const RefineInput clean = PlaneWithInitialSurfaces(plane, 0.0, 0.0);
   const auto two_views = [&](bool half_seen) {
     RefineInput two = clean;
@@ -215,10 +221,7 @@ TEST(Refine, OnePairsAdaptiveStartHalvesTheFacesThePairResolves) {
 // fewer faces.
 TEST(Refine, WhetherThePairResolvesTheSurfaceDoesNotDependOnTheFlatEdge) {
   const testing::Plane plane;
-  RefineOptions o = SmallOptions();
-  o.levels = 0;
-  o.iterations_per_level = 1;
-  o.coarsest_iterations_factor = 1;
+  RefineOptions o = OneIterationAtFullResolution();
   o.initial_detail_gsd = 0.7;
   RefineInput two = PlaneWithInitialSurfaces(plane, 0.0, 0.0);
   two.views.resize(2);
