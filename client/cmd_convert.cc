@@ -38,7 +38,7 @@ constexpr const char* kUsage =
     "  --ply-ascii          ASCII PLY (default binary little endian)\n"
     "  --ply-float          float PLY coordinates (default double, origin added)\n"
     "  --draco-bits N       Draco/glb position quantisation bits, in [8, 30] (default 16)\n"
-    "  --draco-speed N      Draco encoder speed, in [0, 10] (default 5)\n"
+    "  --draco-speed N      Draco encoder speed, in [0, 10] (default 6)\n"
     "\n"
     ".drc/.glb store tile-local positions: the mesh origin is logged, not written.\n";
 
