@@ -70,7 +70,8 @@ bool RemeshedDsmAtFullResolution(const RefineOptions& options, bool initial_is_m
 // sees a wall from at most one side, at grazing incidence; the second round cost stereo
 // 0.5 m (6 seeds) 0.83x the job's time for F +0.1 to +0.3 and facades 0 to +0.2 points,
 // roofs and under overhangs within the runs' noise, the Pleiades held-out pairs within
-// 0.0002 (docs/benchmarks-history.md, session 41).
+// 0.0002; at 0.7 m (1.85 pixels are 1.3 m there) it was worth F +1.1 / +1.3
+// (docs/benchmarks-history.md, session 41).
 bool AdaptiveStart(const RefineOptions& options, bool initial_is_mesh, int level) {
   return level == 0 && RemeshedDsmAtFullResolution(options, initial_is_mesh) &&
          options.initial_detail_gsd > 0 && options.flat_edge_px > options.coarse_edge_px;
