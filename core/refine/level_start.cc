@@ -65,12 +65,14 @@ bool RemeshedDsmAtFullResolution(const RefineOptions& options, bool initial_is_m
 // fell (img_03's mean 0.78795 -> 0.78550): the flat parts of real images carry detail the
 // larger triangles do not hold. Stereo 0.5 m s1 / s2 / seed 51 (docs/benchmarks-history.md,
 // session 39): the job in 0.6-0.7x the time, the accuracy within the runs' noise, the
-// Pléiades held-out pairs within 0.0002. One pair's start is subdivided once (DetailRounds:
-// 3.7 -> 1.85 pixels where the initial surface departs), not down to 0.9 pixels: one pass
-// sees a wall from at most one side, at grazing incidence; the second round cost stereo
-// 0.5 m (6 seeds) 0.83x the job's time for F +0.1 to +0.3 and facades 0 to +0.2 points,
-// roofs and under overhangs within the runs' noise, the Pleiades held-out pairs within
-// 0.0002; at 0.7 m (1.85 pixels are 1.3 m there) it was worth F +1.1 / +1.3
+// Pléiades held-out pairs within 0.0002. One pair's start is subdivided down to the
+// initial surface's own cells (FinestDetailPx), not below: one pass sees a wall from at
+// most one side, at grazing incidence, and finer than its cells the initial surface holds
+// no more detail to follow. At 0.5 m (a DSM block-averaged to 1 m) that is one round, 3.7
+// -> 1.85 pixels: the second cost stereo 0.5 m (6 seeds) 1/0.83x the job's time for F +0.1
+// to +0.3 and facades 0 to +0.2 points, roofs and under overhangs within the runs' noise,
+// the Pleiades held-out pairs within 0.0002. At 0.7 m (a DSM meshed at its 0.7 m cells)
+// it is two, down to 0.93 pixels, where the second round is worth F +1.1 / +1.3
 // (docs/benchmarks-history.md, session 41).
 bool AdaptiveStart(const RefineOptions& options, bool initial_is_mesh, int level) {
   return level == 0 && RemeshedDsmAtFullResolution(options, initial_is_mesh) &&
@@ -162,7 +164,10 @@ TriangleMesh LevelStartMesh(const RefineInput& input, const RefineOptions& optio
   if (adaptive_taken) *adaptive_taken = adaptive;
   const RayScene initial(input.initial_mesh);  // after the test: a DSM mesh of millions of faces
   const int rounds =
-      adaptive ? DetailRounds(options.flat_edge_px, options.coarse_edge_px, pairs.size()) : 1;
+      adaptive ? DetailRounds(options.flat_edge_px,
+                              FinestDetailPx(options.coarse_edge_px, pairs.size(),
+                                             input.initial_mesh_cell_m / gsd_m))
+               : 1;
   std::vector<char> resolved;  // one pair's adaptive start: halved in the first round
   if (adaptive && pairs.size() == 1)
     resolved = FacesWithinSigma(mesh, sigma, kOnePairResolvedSigmaGsd * gsd_m);
@@ -251,8 +256,13 @@ std::vector<char> FacesWithinSigma(const TriangleMesh& mesh, const std::vector<f
   return within;
 }
 
-int DetailRounds(double flat_edge_px, double coarse_edge_px, size_t num_pairs) {
-  const double finest_px = num_pairs > 1 ? coarse_edge_px / 2 : coarse_edge_px;
+double FinestDetailPx(double coarse_edge_px, size_t num_pairs, double initial_cell_px) {
+  const double half = coarse_edge_px / 2;
+  if (num_pairs > 1) return half;
+  return std::clamp(initial_cell_px, half, coarse_edge_px);
+}
+
+int DetailRounds(double flat_edge_px, double finest_px) {
   int rounds = 1;
   for (double edge = flat_edge_px / 2; edge > 1.01 * finest_px; edge /= 2) ++rounds;
   return rounds;

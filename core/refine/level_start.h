@@ -57,10 +57,16 @@ double ResolveFlatEdge(const RefineOptions& options, bool initial_is_mesh, size_
 std::vector<char> FacesWithinSigma(const TriangleMesh& mesh, const std::vector<float>& sigma,
                                    double limit_m);
 
+// The finest triangle edge (pixels) an adaptive start is subdivided to where the initial
+// surface departs from it: half of coarse_edge_px; with one pair, the initial surface's
+// own cells (initial_cell_px: its mesh's grid cell in pixels, 0 where unknown) within
+// [half of coarse_edge_px, coarse_edge_px].
+double FinestDetailPx(double coarse_edge_px, size_t num_pairs, double initial_cell_px);
+
 // The number of times a start of flat_edge_px pixels is subdivided where the initial
-// surface departs from it: until its finest triangles are at most half of coarse_edge_px
-// (one pair: coarse_edge_px), at least once. 4 and 2 pixels: 2 (4 -> 2 -> 1 pixel); 2 and
-// 2: 1; one pair's 3.7 and 2: 1 (3.7 -> 1.85).
-int DetailRounds(double flat_edge_px, double coarse_edge_px, size_t num_pairs);
+// surface departs from it: until its finest triangles are at most finest_px
+// (FinestDetailPx), at least once. 4 to 1 pixel: 2 (4 -> 2 -> 1); 2 to 1: 1; 3.7 to 2:
+// 1 (3.7 -> 1.85).
+int DetailRounds(double flat_edge_px, double finest_px);
 
 }  // namespace satmesh

@@ -33,17 +33,30 @@ RefineOptions OneIterationAtFullResolution() {
 }
 
 // flat_edge_px: a start of 4 pixels is halved twice where the initial surface departs from
-// it (4 -> 2 -> 1 pixel, as the 2-pixel remesh is halved once); 2 once; 8 three times. One
-// pair's start is halved to the coarse edge: 3.7 once, 8 twice (8 -> 4 -> 2).
-TEST(LevelStart, DetailRoundsHalveTheFlatEdgeToHalfTheCoarseEdge) {
-  EXPECT_EQ(DetailRounds(4, 2, 3), 2);
-  EXPECT_EQ(DetailRounds(2, 2, 3), 1);
-  EXPECT_EQ(DetailRounds(8, 2, 3), 3);
-  EXPECT_EQ(DetailRounds(3, 2, 3), 2);  // 3 -> 1.5 -> 0.75
-  EXPECT_EQ(DetailRounds(1, 2, 3), 1);
-  EXPECT_EQ(DetailRounds(3.7, 2, 1), 1);
-  EXPECT_EQ(DetailRounds(8, 2, 1), 2);
-  EXPECT_EQ(DetailRounds(2, 2, 1), 1);
+// it (4 -> 2 -> 1 pixel, as the 2-pixel remesh is halved once); 2 once; 8 three times.
+TEST(LevelStart, DetailRoundsHalveTheFlatEdgeToTheFinestEdge) {
+  EXPECT_EQ(DetailRounds(4, 1), 2);
+  EXPECT_EQ(DetailRounds(2, 1), 1);
+  EXPECT_EQ(DetailRounds(8, 1), 3);
+  EXPECT_EQ(DetailRounds(3, 1), 2);  // 3 -> 1.5 -> 0.75
+  EXPECT_EQ(DetailRounds(1, 1), 1);
+  EXPECT_EQ(DetailRounds(3.7, 2), 1);  // 3.7 -> 1.85
+  EXPECT_EQ(DetailRounds(8, 2), 2);    // 8 -> 4 -> 2
+}
+
+// The finest edge: half the coarse edge with more than one pair; with one pair the initial
+// surface's cells within [half, one] coarse edge: a 0.5 m job's DSM block-averaged to 1 m
+// (1.98 pixels) gives one round from 3.7 pixels, a 0.7 m job's DSM at its own 0.7 m cells
+// (1 pixel) two.
+TEST(LevelStart, OnePairsFinestEdgeIsTheInitialSurfacesCell) {
+  EXPECT_EQ(FinestDetailPx(2, 3, 1.98), 1);
+  EXPECT_EQ(FinestDetailPx(2, 1, 1.98), 1.98);
+  EXPECT_EQ(FinestDetailPx(2, 1, 1.0), 1);
+  EXPECT_EQ(FinestDetailPx(2, 1, 0.5), 1);  // never below half the coarse edge
+  EXPECT_EQ(FinestDetailPx(2, 1, 4), 2);    // nor above it
+  EXPECT_EQ(FinestDetailPx(2, 1, 0), 1);    // unknown: as with more pairs
+  EXPECT_EQ(DetailRounds(3.7, FinestDetailPx(2, 1, 1.98)), 1);
+  EXPECT_EQ(DetailRounds(3.7, FinestDetailPx(2, 1, 1.0)), 2);
 }
 
 // flat_edge_px -1: twice coarse_edge_px for a DSM start remeshed without coarser levels and
