@@ -90,7 +90,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "initial_detail_gsd > 0): its "
        "triangles' edge in pixels where the initial surface is planar, halved where the "
        "initial surface departs from them by more than initial_detail_gsd, down to half of "
-       "coarse_edge_px (one pair: to coarse_edge_px); at most coarse_edge_px: off; -1: 2 x "
+       "coarse_edge_px (one pair: to the initial surface's cells, within half to one "
+       "coarse_edge_px); at most coarse_edge_px: off; -1: 2 x "
        "coarse_edge_px with more than "
        "one pair, 1.85 x with one pair (its faces the pair resolves to 2 GSD halved at once), "
        "else off"},

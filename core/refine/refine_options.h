@@ -92,7 +92,8 @@ struct RefineOptions {
                                    // triangles' edge in pixels where the initial surface is
                                    // planar, halved where the initial surface departs from
                                    // them by more than initial_detail_gsd down to half of
-                                   // coarse_edge_px (one pair: to coarse_edge_px; a mesh
+                                   // coarse_edge_px (one pair: to the initial surface's
+                                   // cells, within half to one coarse_edge_px; a mesh
                                    // whose resolution follows the surface;
                                    // level_start.cc, AdaptiveStart); at most
                                    // coarse_edge_px: off; -1: 2 x coarse_edge_px with more
