@@ -116,42 +116,10 @@ bool CopiedTheOnlyTile(const JobPlan& plan, const std::vector<TileResult>& resul
   return true;
 }
 
-}  // namespace
-
-Tileset BuildTileset(const JobPlan& plan, const std::vector<TileResult>& results) {
-  Tileset ts;
-  ts.geometric_error = plan.tile_cells * plan.dsm.geo_transform[1];
-  ts.region = {1e300, 1e300, -1e300, -1e300, 1e300, -1e300};
-  for (const auto& r : results) {
-    if (!r.ok) continue;
-    TilesetTile t{r.name, TileGlbPath(plan.tiles[r.index]), r.region, r.transform, 0.0};
-    for (int k : {0, 1, 4}) ts.region[k] = std::min(ts.region[k], r.region[k]);
-    for (int k : {2, 3, 5}) ts.region[k] = std::max(ts.region[k], r.region[k]);
-    ts.tiles.push_back(t);
-  }
-  return ts;
-}
-
-Assembly AssembleOutputs(const JobPlan& plan, const std::vector<TileResult>& results,
-                         const std::string& out_dir) {
-  const auto t0 = std::chrono::steady_clock::now();
-  Assembly out;
-  std::string first_error;
-  for (const auto& r : results) {
-    (r.ok ? out.tiles_ok : out.tiles_failed)++;
-    if (!r.ok && first_error.empty()) first_error = r.name + ": " + r.error;
-  }
-  SATMESH_CHECK(out.tiles_ok > 0, ErrorCode::kInvalidInput, "every tile failed; first: " + first_error);
-  out.mesh_path = (fs::path(out_dir) / "mesh.ply").string();
-  out.dsm_path = (fs::path(out_dir) / "dsm.tif").string();
-  if (CopiedTheOnlyTile(plan, results, out_dir, &out)) {
-    out.seams_total = Stats("all", "all", {});
-    out.tileset = BuildTileset(plan, results);
-    out.assemble_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return out;
-  }
-
-  // Mesh and DSM: each tile's core.
+// Mesh and DSM: each successful tile's core, the pieces merged where they meet, written to
+// out->mesh_path, out->dsm_path and (where every successful tile has one) confidence.tif.
+void MergeTiles(const JobPlan& plan, const std::vector<TileResult>& results,
+                const std::string& out_dir, Assembly* out) {
   TriangleMesh mesh;
   Dsm dsm;
   const PixelWindow& a = plan.aoi_cells;
@@ -182,15 +150,46 @@ Assembly AssembleOutputs(const JobPlan& plan, const std::vector<TileResult>& res
   // Pieces meet along the cores' edges: a cut vertex two tiles share is one vertex.
   const MeshDebris merged = CleanMesh(&mesh);
   if (merged.Total() > 0) spdlog::info("assemble: {}", merged.ToString());
-  out.vertices = mesh.num_vertices();
-  out.faces = mesh.num_faces();
-  WriteMesh(out.mesh_path, mesh);
+  out->vertices = mesh.num_vertices();
+  out->faces = mesh.num_faces();
+  WriteMesh(out->mesh_path, mesh);
   mesh = TriangleMesh{};
-  WriteDsm(out.dsm_path, dsm);
+  WriteDsm(out->dsm_path, dsm);
   if (all_confidence) {
-    out.confidence_path = (fs::path(out_dir) / "confidence.tif").string();
-    WriteDsm(out.confidence_path, confidence);
+    out->confidence_path = (fs::path(out_dir) / "confidence.tif").string();
+    WriteDsm(out->confidence_path, confidence);
   }
+}
+
+}  // namespace
+
+Tileset BuildTileset(const JobPlan& plan, const std::vector<TileResult>& results) {
+  Tileset ts;
+  ts.geometric_error = plan.tile_cells * plan.dsm.geo_transform[1];
+  ts.region = {1e300, 1e300, -1e300, -1e300, 1e300, -1e300};
+  for (const auto& r : results) {
+    if (!r.ok) continue;
+    TilesetTile t{r.name, TileGlbPath(plan.tiles[r.index]), r.region, r.transform, 0.0};
+    for (int k : {0, 1, 4}) ts.region[k] = std::min(ts.region[k], r.region[k]);
+    for (int k : {2, 3, 5}) ts.region[k] = std::max(ts.region[k], r.region[k]);
+    ts.tiles.push_back(t);
+  }
+  return ts;
+}
+
+Assembly AssembleOutputs(const JobPlan& plan, const std::vector<TileResult>& results,
+                         const std::string& out_dir) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Assembly out;
+  std::string first_error;
+  for (const auto& r : results) {
+    (r.ok ? out.tiles_ok : out.tiles_failed)++;
+    if (!r.ok && first_error.empty()) first_error = r.name + ": " + r.error;
+  }
+  SATMESH_CHECK(out.tiles_ok > 0, ErrorCode::kInvalidInput, "every tile failed; first: " + first_error);
+  out.mesh_path = (fs::path(out_dir) / "mesh.ply").string();
+  out.dsm_path = (fs::path(out_dir) / "dsm.tif").string();
+  if (!CopiedTheOnlyTile(plan, results, out_dir, &out)) MergeTiles(plan, results, out_dir, &out);
 
   // Seams between successful neighbours.
   std::vector<double> all;
