@@ -87,14 +87,12 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "departs from by more than that are subdivided, their new vertices put on it; 0: off"},
       {"flat_edge_px", &R::flat_edge_px, Range::In(-1, 16),
        "a DSM start remeshed at full resolution (no coarser level, grid_start 0, "
-       "initial_detail_gsd > 0): its "
-       "triangles' edge in pixels where the initial surface is planar, halved where the "
-       "initial surface departs from them by more than initial_detail_gsd, down to half of "
-       "coarse_edge_px (one pair: to the initial surface's cells, within half to one "
-       "coarse_edge_px); at most coarse_edge_px: off; -1: 2 x "
-       "coarse_edge_px with more than "
-       "one pair, 1.85 x with one pair (its faces the pair resolves to 2 GSD halved at once), "
-       "else off"},
+       "initial_detail_gsd > 0): its triangles' edge in pixels where the initial surface is "
+       "planar, halved where the initial surface departs from them by more than "
+       "initial_detail_gsd, down to half of coarse_edge_px (one pair: to the initial "
+       "surface's cells, within half to one coarse_edge_px); at most coarse_edge_px: off; -1: "
+       "2 x coarse_edge_px with more than one pair, 1.85 x with one pair (its faces the pair "
+       "resolves to 2 GSD halved at once), else off"},
       {"grid_start", &R::grid_start, Range::In(-1, 1),
        "the coarse mesh of a DSM start: 1: the DSM's own grid at the level's triangle edge, the "
        "thin plate's umbrella weighing each neighbour by 1 / edge length, so the images form the "
