@@ -337,6 +337,10 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
   result.candidate_pairs = selection.num_candidates;
   spdlog::info("refine: {} views, {} pairs of {} candidates, GSD {:.3f} m", input.views.size(),
                result.pairs.size(), selection.num_candidates, result.gsd_m);
+  options.zncc_window_radius = ResolveZnccWindowRadius(options, result.pairs.size());
+  if (user_options.zncc_window_radius < 0 && result.pairs.size() == 1)
+    spdlog::info("refine: one pair: ZNCC windows of {0}x{0} pixels",
+                 2 * options.zncc_window_radius + 1);
 
   // 3. Per-view RPC biases.
   if (options.estimate_bias) EstimateBiases(input, selection, options, progress, &views, &result);

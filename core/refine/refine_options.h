@@ -50,7 +50,8 @@ struct RefineOptions {
   double momentum = 0.5;           // each vertex's move adds this x the move its last two
                                    // agree on (heavy ball, MomentumStep, AgreedMove;
                                    // docs/benchmarks-history.md, sessions 31 and 32)
-  int zncc_window_radius = 2;      // ZNCC window (2r+1)²
+  int zncc_window_radius = -1;     // ZNCC window (2r+1)²; -1: 3 with one pair, else 2
+                                   // (ResolveZnccWindowRadius)
   double min_window_valid = 0.5;   // min fraction of valid pixels in a ZNCC window
   double variance_floor = 1e-4;    // floor of the windows' variances (unit-range images)
   double noise_variance_factor = 4.0;  // the floor is raised to this x the images' noise
@@ -247,5 +248,11 @@ const RefineOptionInfo* FindRefineOption(std::string_view name);
 // edge is at most twice the bound (0.5 m and 0.7 m images).
 int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cell_m,
                   bool initial_is_mesh = false);
+
+// The ZNCC window's radius: options.zncc_window_radius, or for -1 3 (7x7 pixels) where one
+// pair refines the surface and 2 (5x5) otherwise (num_pairs 0: a measurement, not a
+// refinement). One pair's vertex has one match to go on where several pairs average
+// theirs: its window takes twice the pixels against the images' noise.
+int ResolveZnccWindowRadius(const RefineOptions& options, size_t num_pairs);
 
 }  // namespace satmesh

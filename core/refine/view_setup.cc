@@ -86,7 +86,7 @@ PairSelection SelectViewPairs(const RefineInput& input, const std::vector<Prepar
 PhotometricOptions PhotometricOptionsAt(const RefineOptions& opt, double gsd_m,
                                         double noise_variance) {
   PhotometricOptions photo;
-  photo.zncc.window_radius = opt.zncc_window_radius;
+  photo.zncc.window_radius = ResolveZnccWindowRadius(opt, 0);  // resolved by Refine, else 5x5
   photo.zncc.min_valid_fraction = opt.min_window_valid;
   photo.zncc.variance_floor = std::max(opt.variance_floor, opt.noise_variance_factor * noise_variance);
   photo.visibility_tolerance_m = opt.visibility_tolerance_gsd * gsd_m;

@@ -114,6 +114,21 @@ TEST(RefineOptions, CrossFieldChecksUseWireNames) {
   EXPECT_EQ(o.pairs.Check(), o.Check());
 }
 
+TEST(RefineOptions, ZnccWindowIsLargerForOnePairUnlessSet) {
+  RefineOptions o;
+  EXPECT_EQ(ResolveZnccWindowRadius(o, 1), 3);  // one pair: 7x7
+  EXPECT_EQ(ResolveZnccWindowRadius(o, 2), 2);
+  EXPECT_EQ(ResolveZnccWindowRadius(o, 13), 2);
+  EXPECT_EQ(ResolveZnccWindowRadius(o, 0), 2);  // a measurement over given pairs: 5x5
+  o.zncc_window_radius = 2;
+  EXPECT_EQ(ResolveZnccWindowRadius(o, 1), 2);
+  o.zncc_window_radius = 5;
+  EXPECT_EQ(ResolveZnccWindowRadius(o, 4), 5);
+  o.zncc_window_radius = 0;  // in the table's [-1, 7] but neither -1 nor a radius
+  EXPECT_EQ(o.Check(), "zncc_window_radius must be -1 (from the pairs) or in [1, 7], got 0");
+  ExpectOnlyWireNames(o.Check());
+}
+
 TEST(RefineOptions, NanIsOutOfRange) {
   RefineOptions o;
   o.alpha = std::nan("");

@@ -174,7 +174,7 @@ json NonDefaultValue(const RefineOptionInfo& option) {
   const OptionValue d = option.Default();
   if (const bool* b = std::get_if<bool>(&d)) return !*b;
   const double x = std::holds_alternative<int>(d) ? std::get<int>(d) : std::get<double>(d);
-  for (const double v : {x + 1, x - 1, x / 2, x * 1.5, x + 0.5}) {
+  for (const double v : {x + 1, x - 1, x / 2, x * 1.5, x + 0.5, x + 2}) {
     RefineOptions o;
     option.Set(&o, option.type() == OptionType::kInt ? OptionValue(int(v)) : OptionValue(v));
     if (o.Check().empty() && option.Get(o) != d)
