@@ -231,7 +231,7 @@ int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cel
   return level;
 }
 
-// One pair (stereo 0.5 m, six scenes: roofs NMAD 2-8% lower, facades within 0.2 points;
+// One pair: 7x7 (stereo 0.5 m, 14 scenes: roofs NMAD 2-8% lower, facades within 0.2 points;
 // 0.3 and 0.7 m: roofs 3-7% lower, facades 0.1-0.4 points lower; the Pleiades pairs' held-out
 // ZNCC within 0.0003). Several pairs average their matches already: 7x7 windows cost the
 // multi-date facades 0.7-1.2 points (docs/benchmarks-history.md, sessions 11 and 42).
