@@ -337,13 +337,16 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
   result.candidate_pairs = selection.num_candidates;
   spdlog::info("refine: {} views, {} pairs of {} candidates, GSD {:.3f} m", input.views.size(),
                result.pairs.size(), selection.num_candidates, result.gsd_m);
+
+  // 3. Per-view RPC biases.
+  if (options.estimate_bias) EstimateBiases(input, selection, options, progress, &views, &result);
+
+  // The refinement's ZNCC window from the pairs (ResolveZnccWindowRadius), after the bias
+  // estimation: that keeps the measurement's 5x5, as a tiled job's (job.cc) and `satmesh bias`.
   options.zncc_window_radius = ResolveZnccWindowRadius(options, result.pairs.size());
   if (user_options.zncc_window_radius < 0 && result.pairs.size() == 1)
     spdlog::info("refine: one pair: ZNCC windows of {0}x{0} pixels",
                  2 * options.zncc_window_radius + 1);
-
-  // 3. Per-view RPC biases.
-  if (options.estimate_bias) EstimateBiases(input, selection, options, progress, &views, &result);
 
   // 4. Coarse to fine. The coarser level a carried start gets beyond a DSM start's
   //    (ResolveLevels) is dropped again where the full-resolution images determine the
