@@ -80,7 +80,9 @@ struct RenderOptions {
   // pixel) alias into each view differently when the pixel is point-sampled too coarsely.
   // At 2x2 a striped gable roof drew the refinement 2-4 m off the true surface even when it
   // started there (docs/benchmarks-history.md, session 42; stereo 0.5 m s1 from the true DSM:
-  // roofs NMAD 0.172 m at 2x2, 0.128 at 6x6); 4x4 removes it at twice 2x2's render time.
+  // roofs NMAD 0.172 m at 2x2, 0.128 at 6x6). 4x4 removes it on stereo at twice 2x2's render
+  // time; tri-stereo's narrow pairs still draw that gable +2.6 m: the optics' blur
+  // (SensorOptions::mtf_sigma_px) acts after sampling, not before as a real sensor's.
   int supersample = 4;
   float sun_irradiance = 1.0f;  // direct sun on a surface facing it, > 0
   float sky_irradiance = 0.3f;  // diffuse sky on an upward surface, >= 0
