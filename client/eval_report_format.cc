@@ -97,6 +97,11 @@ json Mesh3dMetricsToJson(const Mesh3dMetrics& m) {
   json j = {{"all", ScoresToJson(m.all)}, {"facade", ScoresToJson(m.facade)},
             {"under_overhang", ScoresToJson(m.under_overhang)}};
   if (!m.seen_facade.thresholds_m.empty()) j["seen_facade"] = ScoresToJson(m.seen_facade);
+  const FacadeOffsets& f = m.facade_offset;
+  j["facade_offset"] = {{"max_offset_m", f.max_offset_m},       {"num_samples", f.num_samples},
+                        {"num_crossed", f.num_crossed},         {"p25_m", f.p25_m},
+                        {"median_m", f.median_m},               {"p75_m", f.p75_m},
+                        {"outside_0.5m", f.outside_fraction},   {"inside_0.5m", f.inside_fraction}};
   return j;
 }
 
@@ -136,6 +141,16 @@ std::string FormatSceneEvaluation(const SceneEvaluation& e) {
     Add3dRows(rows, "3D all   ", e.result.mesh3d.all, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.all; });
     Add3dRows(rows, "3D facade", e.result.mesh3d.facade, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.facade; });
     Add3dRows(rows, "3D under overhangs", e.result.mesh3d.under_overhang, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.under_overhang; });
+    const auto offset = [&](std::string name, std::function<double(const FacadeOffsets&)> f,
+                            bool pct) {
+      rows.push_back({"3D facade offset (+ outside) " + name,
+                      [f](const SurfaceEvaluation& s) { return f(s.mesh3d.facade_offset); }, pct});
+    };
+    offset("median [m]", [](const FacadeOffsets& f) { return f.median_m; }, false);
+    offset("p25 [m]", [](const FacadeOffsets& f) { return f.p25_m; }, false);
+    offset("p75 [m]", [](const FacadeOffsets& f) { return f.p75_m; }, false);
+    offset("outside >0.5m", [](const FacadeOffsets& f) { return f.outside_fraction; }, true);
+    offset("inside >0.5m", [](const FacadeOffsets& f) { return f.inside_fraction; }, true);
     if (!e.result.mesh3d.seen_facade.thresholds_m.empty())
       Add3dRows(rows, "3D facade seen by 2 views", e.result.mesh3d.seen_facade, [](const SurfaceEvaluation& s) -> const Mesh3dScores& { return s.mesh3d.seen_facade; });
   }

@@ -152,6 +152,50 @@ std::vector<uint8_t> SeenByViews(const TriangleMesh& mesh, const SurfaceSamples&
   return seen;
 }
 
+FacadeOffsets MeasureFacadeOffsets(const TriangleMesh& result, const SurfaceSamples& samples,
+                                   const std::vector<uint8_t>& is_facade, double max_offset_m) {
+  SATMESH_CHECK(is_facade.size() == samples.points.size(), ErrorCode::kInvalidArgument,
+                "MeasureFacadeOffsets: " + std::to_string(is_facade.size()) + " flags for " +
+                    std::to_string(samples.points.size()) + " samples");
+  SATMESH_CHECK(max_offset_m > 0, ErrorCode::kInvalidArgument,
+                "MeasureFacadeOffsets: max_offset_m must be > 0, got " +
+                    std::to_string(max_offset_m));
+  FacadeOffsets f;
+  f.max_offset_m = max_offset_m;
+  std::vector<Ray> rays;  // per facade sample: outward, then inward
+  for (size_t k = 0; k < samples.points.size(); ++k) {
+    if (!is_facade[k]) continue;
+    const Eigen::Vector3f p = (samples.points[k] - result.origin).cast<float>();
+    for (const float sign : {1.f, -1.f})
+      rays.push_back({p, sign * samples.normals[k], 0.f, float(max_offset_m)});
+  }
+  f.num_samples = rays.size() / 2;
+  if (rays.empty() || result.faces.empty()) return f;
+  std::vector<RayHit> hits(rays.size());
+  RayScene(result).Intersect(rays.data(), hits.data(), rays.size());
+  std::vector<double> offsets;
+  for (size_t i = 0; i < f.num_samples; ++i) {
+    const RayHit &out = hits[2 * i], &in = hits[2 * i + 1];
+    if (!out.hit() && !in.hit()) continue;
+    const bool outside = out.hit() && (!in.hit() || out.t <= in.t);
+    offsets.push_back(outside ? double(out.t) : -double(in.t));
+  }
+  f.num_crossed = offsets.size();
+  for (const double o : offsets) {
+    f.outside_fraction += o > 0.5;
+    f.inside_fraction += o < -0.5;
+  }
+  f.outside_fraction /= double(f.num_samples);
+  f.inside_fraction /= double(f.num_samples);
+  if (offsets.empty()) return f;
+  std::sort(offsets.begin(), offsets.end());
+  const auto at = [&](double q) { return offsets[size_t(std::lround(q * (offsets.size() - 1)))]; };
+  f.p25_m = at(0.25);
+  f.median_m = at(0.5);
+  f.p75_m = at(0.75);
+  return f;
+}
+
 namespace {
 
 // The facade samples at least two views see on their own surface: the metric's selection.
@@ -191,6 +235,7 @@ Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& tru
   m.facade = Scores(d_result, facade_result, d_truth, facade_truth, options.thresholds_m);
   m.under_overhang = Scores(d_result, UnderOverhang(result, s_result), d_truth,
                             UnderOverhang(truth, s_truth), options.thresholds_m);
+  m.facade_offset = MeasureFacadeOffsets(result, s_truth, facade_truth, 3.0);
   if (views && *views) {
     m.seen_facade = Scores(d_result, SeenFacade(result, s_result, facade_result, *views), d_truth,
                            SeenFacade(truth, s_truth, facade_truth, *views), options.thresholds_m);

@@ -73,6 +73,24 @@ std::vector<uint8_t> SeenByViews(const TriangleMesh& mesh, const SurfaceSamples&
                                  const ViewDirections& directions, int min_views = kSeenMinViews,
                                  double min_cos = kSeenMinCos);
 
+// Where the result's walls lie against the truth's: per truth facade sample, the signed
+// distance along the sample's outward normal to the result surface (the nearer crossing of
+// the line through the sample along its normal, within max_offset_m either way): positive
+// where the result lies outside the true wall (a DSM's fattened walls, a wall not yet moved
+// in), negative inside. Completeness says how many walls are near; this says which way the
+// others are off. Quantiles over the samples with a crossing.
+struct FacadeOffsets {
+  double max_offset_m = 0;
+  size_t num_samples = 0;  // facade samples of the truth
+  size_t num_crossed = 0;  // of them, with the result within max_offset_m along the normal
+  double p25_m = 0, median_m = 0, p75_m = 0;
+  double outside_fraction = 0;  // of all num_samples: offset > 0.5 m (outside, not near)
+  double inside_fraction = 0;   // offset < -0.5 m
+};
+
+FacadeOffsets MeasureFacadeOffsets(const TriangleMesh& result, const SurfaceSamples& samples,
+                                   const std::vector<uint8_t>& is_facade, double max_offset_m);
+
 struct Mesh3dMetrics {
   Mesh3dScores all;     // every sample
   Mesh3dScores facade;  // facade samples only (on either side; distances to the whole surface)
@@ -83,6 +101,7 @@ struct Mesh3dMetrics {
   // Facade samples at least two views see (SeenByViews, each surface's samples on itself):
   // the facades a multi-view method can reach. Empty (no samples) without views.
   Mesh3dScores seen_facade;
+  FacadeOffsets facade_offset;  // the truth's facade samples, max_offset_m 3
 };
 
 // Per sample of `mesh`: 1 if a vertical ray up from 0.1 m off the sample (along its

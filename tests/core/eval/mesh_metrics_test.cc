@@ -132,6 +132,41 @@ TEST(EvaluateMesh3d, CropAndOptions) {
   EXPECT_THROW(EvaluateMesh3d(mesh, mesh, o), Error);
 }
 
+TEST(FacadeOffsets, SignFollowsWhichSideOfTheTrueWallTheResultLies) {
+  const TriangleMesh truth = MakeBoxScene();
+  // The building (its last 8 vertices) scaled about its axis: walls `d` m out (d > 0) or in.
+  auto scaled = [&](float d) {
+    TriangleMesh m = truth;
+    for (size_t i = m.vertices.size() - 8; i < m.vertices.size(); ++i) {
+      auto& v = m.vertices[i];
+      v.x() = 10 + (v.x() - 10) * (3 + d) / 3;
+      v.y() = 10 + (v.y() - 10) * (3 + d) / 3;
+    }
+    return m;
+  };
+  const FacadeOffsets out = EvaluateMesh3d(scaled(0.4f), truth).facade_offset;
+  EXPECT_EQ(out.max_offset_m, 3.0);
+  EXPECT_NEAR(out.median_m, 0.4, 0.01);
+  EXPECT_NEAR(out.p25_m, 0.4, 0.01);
+  EXPECT_NEAR(out.p75_m, 0.4, 0.01);
+  EXPECT_DOUBLE_EQ(out.outside_fraction, 0.0);  // 0.4 m out is near, not "outside"
+  EXPECT_GT(double(out.num_crossed), 0.97 * double(out.num_samples));
+  EXPECT_NEAR(double(out.num_samples), 120.0 * 4, 0.1 * 120 * 4);  // 4 samples per m^2
+  // 0.6 m in: each wall's 0.6 m at both ends looks past the shrunk building (20%).
+  const FacadeOffsets in = EvaluateMesh3d(scaled(-0.6f), truth).facade_offset;
+  EXPECT_NEAR(in.median_m, -0.6, 0.01);
+  EXPECT_NEAR(in.inside_fraction, 0.8, 0.05);
+  EXPECT_NEAR(double(in.num_crossed) / double(in.num_samples), 0.8, 0.05);
+  EXPECT_DOUBLE_EQ(in.outside_fraction, 0.0);
+  // Beyond max_offset_m nothing is crossed; the flags must match the samples.
+  const SurfaceSamples samples = SampleSurface(truth);
+  std::vector<uint8_t> facade(samples.points.size());
+  for (size_t k = 0; k < facade.size(); ++k) facade[k] = IsFacadeNormal(samples.normals[k], 0.3);
+  EXPECT_EQ(MeasureFacadeOffsets(scaled(0.4f), samples, facade, 0.3).num_crossed, 0u);
+  EXPECT_THROW(MeasureFacadeOffsets(truth, samples, {}, 3.0), Error);
+  EXPECT_THROW(MeasureFacadeOffsets(truth, samples, facade, 0.0), Error);
+}
+
 }  // namespace
 }  // namespace satmesh
 
