@@ -182,8 +182,8 @@ FacadeOffsets MeasureFacadeOffsets(const TriangleMesh& result, const SurfaceSamp
   }
   f.num_crossed = offsets.size();
   for (const double o : offsets) {
-    f.outside_fraction += o > 0.5;
-    f.inside_fraction += o < -0.5;
+    f.outside_fraction += o > kFacadeOffsetFarM;
+    f.inside_fraction += o < -kFacadeOffsetFarM;
   }
   f.outside_fraction /= double(f.num_samples);
   f.inside_fraction /= double(f.num_samples);
@@ -235,7 +235,7 @@ Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& tru
   m.facade = Scores(d_result, facade_result, d_truth, facade_truth, options.thresholds_m);
   m.under_overhang = Scores(d_result, UnderOverhang(result, s_result), d_truth,
                             UnderOverhang(truth, s_truth), options.thresholds_m);
-  m.facade_offset = MeasureFacadeOffsets(result, s_truth, facade_truth, 3.0);
+  m.facade_offset = MeasureFacadeOffsets(result, s_truth, facade_truth, kFacadeOffsetMaxM);
   if (views && *views) {
     m.seen_facade = Scores(d_result, SeenFacade(result, s_result, facade_result, *views), d_truth,
                            SeenFacade(truth, s_truth, facade_truth, *views), options.thresholds_m);

@@ -79,13 +79,16 @@ std::vector<uint8_t> SeenByViews(const TriangleMesh& mesh, const SurfaceSamples&
 // where the result lies outside the true wall (a DSM's fattened walls, a wall not yet moved
 // in), negative inside. Completeness says how many walls are near; this says which way the
 // others are off. Quantiles over the samples with a crossing.
+inline constexpr double kFacadeOffsetMaxM = 3.0;  // EvaluateMesh3d's search either way, m
+inline constexpr double kFacadeOffsetFarM = 0.5;  // outside / inside beyond this, m
+
 struct FacadeOffsets {
   double max_offset_m = 0;
   size_t num_samples = 0;  // facade samples of the truth
   size_t num_crossed = 0;  // of them, with the result within max_offset_m along the normal
   double p25_m = 0, median_m = 0, p75_m = 0;
-  double outside_fraction = 0;  // of all num_samples: offset > 0.5 m (outside, not near)
-  double inside_fraction = 0;   // offset < -0.5 m
+  double outside_fraction = 0;  // of all num_samples: offset > kFacadeOffsetFarM
+  double inside_fraction = 0;   // offset < -kFacadeOffsetFarM
 };
 
 FacadeOffsets MeasureFacadeOffsets(const TriangleMesh& result, const SurfaceSamples& samples,
@@ -101,7 +104,7 @@ struct Mesh3dMetrics {
   // Facade samples at least two views see (SeenByViews, each surface's samples on itself):
   // the facades a multi-view method can reach. Empty (no samples) without views.
   Mesh3dScores seen_facade;
-  FacadeOffsets facade_offset;  // the truth's facade samples, max_offset_m 3
+  FacadeOffsets facade_offset;  // the truth's facade samples, kFacadeOffsetMaxM
 };
 
 // Per sample of `mesh`: 1 if a vertical ray up from 0.1 m off the sample (along its
