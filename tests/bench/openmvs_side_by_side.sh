@@ -93,8 +93,9 @@ def metrics(name, which="result"):
     m3 = e["mesh3d"]
     return [f"{roof['nmad_m']:.3f}", f"{roof['perc68_m']:.3f}",
             f"{100 * m3['facade']['completeness']['0.5m']:.0f}%",
-            f"{100 * m3['under_overhang']['completeness']['0.5m']:.0f}%",
-            f"{100 * m3['all']['fscore']['0.5m']:.1f}"]
+            f"{100 * m3['under_overhang']['completeness']['0.5m']:.1f}%",
+            f"{100 * m3['all']['fscore']['0.5m']:.1f}",
+            f"{m3['facade_offset']['median_m']:+.2f}"]
 
 def timing(*names):
     wall = cpu = 0.0
@@ -120,8 +121,8 @@ print(f"\nOpenMVS input: {os.environ.get('OPENMVS_INITIAL', 'dsm')} mesh, "
       f"{'biases estimated by satmesh' if os.environ.get('OPENMVS_BIAS') == '1' else 'the job RPCs'}")
 print(f"scene {scene}  (load average now {' '.join(load)}, {os.cpu_count()} CPUs)")
 print("| | roofs NMAD m | roofs perc-68 m | facades @0.5 | under overhangs @0.5 | F @0.5 "
-      "| wall s | CPU s | peak MB | faces |")
-print("|---|---|---|---|---|---|---|---|---|---|")
+      "| walls' offset m | wall s | CPU s | peak MB | faces |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 print("| initial DSM | " + " | ".join(metrics("satmesh", "initial")) + " | | | | |")
 print("| initial.ply via --frame (OpenMVS input) | " + " | ".join(metrics("initial")) + " | | | | |")
 print("| OpenMVS RefineMesh | " + " | ".join(metrics("openmvs") + timing("refinemesh")) +
