@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/common/error.h"
+#include "core/eval/stats.h"
 #include "core/raycast/ray_scene.h"
 
 namespace satmesh {
@@ -187,12 +188,9 @@ FacadeOffsets MeasureFacadeOffsets(const TriangleMesh& result, const SurfaceSamp
   }
   f.outside_fraction /= double(f.num_samples);
   f.inside_fraction /= double(f.num_samples);
-  if (offsets.empty()) return f;
-  std::sort(offsets.begin(), offsets.end());
-  const auto at = [&](double q) { return offsets[size_t(std::lround(q * (offsets.size() - 1)))]; };
-  f.p25_m = at(0.25);
-  f.median_m = at(0.5);
-  f.p75_m = at(0.75);
+  f.p25_m = Quantile(offsets, 0.25);
+  f.median_m = Quantile(offsets, 0.5);
+  f.p75_m = Quantile(offsets, 0.75);
   return f;
 }
 
