@@ -31,6 +31,20 @@ std::vector<char> WallVertices(const TriangleMesh& mesh) {
   return on_wall;
 }
 
+std::vector<Eigen::Vector3f> WallNormals(const TriangleMesh& mesh) {
+  std::vector<Eigen::Vector3d> sum(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  for (const Eigen::Vector3i& f : mesh.faces) {
+    const Eigen::Vector3d n = AreaNormal(mesh, f);
+    if (!IsWall(n)) continue;
+    const Eigen::Vector3d h = n.norm() / n.head<2>().norm() * Eigen::Vector3d(n.x(), n.y(), 0);
+    for (int k = 0; k < 3; ++k) sum[f[k]] += h;
+  }
+  std::vector<Eigen::Vector3f> normals(sum.size(), Eigen::Vector3f::Zero());
+  for (size_t v = 0; v < sum.size(); ++v)
+    if (sum[v].norm() > 0) normals[v] = sum[v].normalized().cast<float>();
+  return normals;
+}
+
 EdgeBiasStats DeflateOccludingEdges(double distance_m, TriangleMesh* mesh) {
   EdgeBiasStats stats;
   if (distance_m == 0 || !std::isfinite(distance_m) || mesh->faces.empty()) return stats;

@@ -24,6 +24,10 @@ inline constexpr float kWallMaxNormalZ = 0.5f;
 // Per vertex, 1 if it belongs to a wall face (|normal z| < kWallMaxNormalZ).
 std::vector<char> WallVertices(const TriangleMesh& mesh);
 
+// Per vertex, the horizontal unit normal of its wall faces (their horizontal normals
+// weighted by area); zero for a vertex of no wall face.
+std::vector<Eigen::Vector3f> WallNormals(const TriangleMesh& mesh);
+
 struct EdgeBiasStats {
   size_t moved = 0;  // vertices moved
 };

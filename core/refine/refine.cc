@@ -347,6 +347,10 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
   if (user_options.zncc_window_radius < 0 && result.pairs.size() == 1)
     spdlog::info("refine: one pair: ZNCC windows of {0}x{0} pixels",
                  2 * options.zncc_window_radius + 1);
+  options.wall_patch_rings = ResolveWallPatchRings(options, result.pairs.size());
+  if (user_options.wall_patch_rings < 0 && options.wall_patch_rings > 0)
+    spdlog::info("refine: one pair: walls move as patches of {} rings at level 0",
+                 options.wall_patch_rings);
 
   // 4. Coarse to fine. The coarser level a carried start gets beyond a DSM start's
   //    (ResolveLevels) is dropped again where the full-resolution images determine the

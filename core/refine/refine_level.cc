@@ -18,6 +18,7 @@
 #include "core/refine/sunlight.h"
 #include "core/refine/thin_plate.h"
 #include "core/refine/view_level.h"
+#include "core/refine/wall_patch.h"
 
 namespace satmesh {
 namespace {
@@ -316,6 +317,11 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // MomentumStep: each vertex's last two moves (the level's first two steps carry nothing).
   std::vector<Eigen::Vector3f> last_move(opt.momentum > 0 ? nv : 0, Eigen::Vector3f::Zero());
   std::vector<Eigen::Vector3f> move_before(last_move.size(), Eigen::Vector3f::Zero());
+  // wall_patch_rings (resolved by Refine): the patches of the level's start, whose faces
+  // keep their facing while the walls move a fraction of a metre.
+  const WallPatches wall_patches = level == 0 && opt.wall_patch_rings > 0
+                                       ? MakeWallPatches(*mesh, adjacency, opt.wall_patch_rings)
+                                       : WallPatches{};
 
   for (int it = 0; it < passes; ++it) {
     ctx.progress.ThrowIfCancelled();
@@ -403,6 +409,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
 
     // Gradient step: photometric part in units of GSD², thin-plate homogenised by 1/GSD².
     t0 = StageClock::now();
+    if (!wall_patches.normal.empty()) PoolWallGradients(wall_patches, &gradient);
     const double photo_scale = opt.step * opt.alpha * gsd * gsd;
     const double smooth_scale = opt.step * opt.beta;
     const double max_move = opt.max_step_gsd * gsd;

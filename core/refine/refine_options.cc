@@ -44,6 +44,11 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "the thin-plate weight of a vertex of a wall face (steeper than 60 degrees) is this times "
        "beta: a wall needs the creases at its top and foot that a uniform thin plate rounds off "
        "(0.25: more of the facades, noisier walls); 1: uniform"},
+      {"wall_patch_rings", &R::wall_patch_rings, Range::In(-1, 8),
+       "at level 0 a wall vertex's step across its wall (faces steeper than 60 degrees) pools "
+       "the gradients of the vertices of its wall within this many edges, where they agree "
+       "beyond their noise: one pair's walls move as patches; 0: off; -1: 3 where one pair "
+       "refines the surface, else off (several pairs move their walls themselves)"},
       {"step", &R::step, Range::Above(0), "gradient step, in units of (level GSD)^2"},
       {"max_step_gsd", &R::max_step_gsd, Range::Above(0),
        "clamp of one vertex's move per iteration, in level GSD"},
@@ -238,6 +243,17 @@ int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cel
 int ResolveZnccWindowRadius(const RefineOptions& options, size_t num_pairs) {
   if (options.zncc_window_radius > 0) return options.zncc_window_radius;
   return num_pairs == 1 ? 3 : 2;
+}
+
+
+// One pair, stereo 0.5 m, 14 seeds: under overhangs @0.5 m +0.7 to +2.9 points (mean +1.5),
+// facades -0.8 to +2.0 (+0.7), F -0.4 to +1.2 (+0.5), roofs NMAD and perc-68 within 0.004 m;
+// 0.3 and 0.4 m, 4 seeds: facades +0.5 to +1.3, F +0.5 to +0.8. Tri-stereo and multi-date
+// (where the pairs move their walls themselves): facades 4-9 points lower, F to -6
+// (docs/benchmarks-history.md, session 44).
+int ResolveWallPatchRings(const RefineOptions& options, size_t num_pairs) {
+  if (options.wall_patch_rings >= 0) return options.wall_patch_rings;
+  return num_pairs == 1 ? 3 : 0;
 }
 
 }  // namespace satmesh

@@ -45,6 +45,10 @@ struct RefineOptions {
                                    // needs the creases at its top and foot that a uniform
                                    // thin plate rounds off (0.25: multi-date facades +1.3 to
                                    // +3.8 points, but 0.3 m F -0.8; BENCHMARKS.md); 1: uniform
+  int wall_patch_rings = -1;       // at level 0 a wall vertex's step across its wall pools the
+                                   // gradients of its wall's vertices within this many edges
+                                   // (wall_patch.h: one pair's walls move as patches); 0: off;
+                                   // -1: 3 where one pair refines the surface, else off
   double step = 0.5;               // gradient step, in units of (level GSD)²
   double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD
   double momentum = 0.5;           // each vertex's move adds this x the move its last two
@@ -254,5 +258,9 @@ int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cel
 // refinement). One pair's vertex has one match to go on where several pairs average
 // theirs: its window takes twice the pixels against the images' noise.
 int ResolveZnccWindowRadius(const RefineOptions& options, size_t num_pairs);
+
+// The wall patches' rings: options.wall_patch_rings, or for -1 3 where one pair refines the
+// surface and 0 (off) otherwise: several pairs move their walls themselves (wall_patch.h).
+int ResolveWallPatchRings(const RefineOptions& options, size_t num_pairs);
 
 }  // namespace satmesh

@@ -1,4 +1,5 @@
-// Walls moved inward by the photometric term's occluding-edge bias (edge_bias.h).
+// Walls moved inward by the photometric term's occluding-edge bias (edge_bias.h), and one
+// pair's walls moved as patches (wall_patch.h).
 #include "core/refine/edge_bias.h"
 
 #include <gtest/gtest.h>
@@ -7,6 +8,9 @@
 #include <cmath>
 #include <map>
 #include <tuple>
+
+#include "core/mesh/topology.h"
+#include "core/refine/wall_patch.h"
 
 namespace satmesh {
 namespace {
@@ -108,6 +112,110 @@ TEST(DeflateOccludingEdges, BoundaryVerticesStay) {
   const TriangleMesh before = wall;
   EXPECT_EQ(DeflateOccludingEdges(0.25, &wall).moved, 0u);
   EXPECT_EQ(wall.vertices, before.vertices);
+}
+
+
+// The east wall's (x = 13) inner vertices, top and foot, and their facing.
+bool OnEastWall(const Eigen::Vector3f& p) { return p.x() == 13 && p.y() > 7 && p.y() < 13; }
+
+TEST(WallNormals, FaceOutOfTheBoxAndIntoTheCornerNoneOffTheWalls) {
+  const TriangleMesh m = BoxOnGround();
+  const std::vector<Eigen::Vector3f> normals = WallNormals(m);
+  for (size_t i = 0; i < m.vertices.size(); ++i) {
+    const Eigen::Vector3f& p = m.vertices[i];
+    const bool x_wall = (p.x() == 7 || p.x() == 13) && p.y() >= 7 && p.y() <= 13;
+    const bool y_wall = (p.y() == 7 || p.y() == 13) && p.x() >= 7 && p.x() <= 13;
+    const Eigen::Vector3f& n = normals[i];
+    if (!x_wall && !y_wall) {
+      EXPECT_TRUE(n.isZero()) << p.transpose();
+      continue;
+    }
+    EXPECT_NEAR(n.norm(), 1.f, 1e-5) << p.transpose();
+    EXPECT_EQ(n.z(), 0.f);
+    const float sx = p.x() == 7 ? -1.f : 1.f, sy = p.y() == 7 ? -1.f : 1.f;
+    if (x_wall && y_wall) {  // a corner: out of both walls, by their faces' areas (1:2, 2:1)
+      EXPECT_GT(sx * n.x(), 0.44f) << p.transpose();
+      EXPECT_GT(sy * n.y(), 0.44f) << p.transpose();
+    } else {  // a side: straight out
+      EXPECT_NEAR(n.x(), x_wall ? sx : 0.f, 1e-5) << p.transpose();
+      EXPECT_NEAR(n.y(), y_wall ? sy : 0.f, 1e-5) << p.transpose();
+    }
+  }
+}
+
+TEST(MakeWallPatches, HoldTheVerticesOfTheSameFacingWithinTheRings) {
+  const TriangleMesh m = BoxOnGround();
+  const VertexAdjacency adjacency = BuildVertexAdjacency(m);
+  const WallPatches one = MakeWallPatches(m, adjacency, 1);
+  const WallPatches three = MakeWallPatches(m, adjacency, 3);
+  const WallPatches alone = MakeWallPatches(m, adjacency, 0);
+  EXPECT_EQ(three.num_walls(), 48u);
+  for (size_t v = 0; v < m.vertices.size(); ++v) {
+    const int n1 = one.offsets[v + 1] - one.offsets[v];
+    const int n3 = three.offsets[v + 1] - three.offsets[v];
+    if (three.normal[v].isZero()) {  // roof, ground: no patch
+      EXPECT_EQ(n3, 0);
+      continue;
+    }
+    EXPECT_EQ(alone.offsets[v + 1] - alone.offsets[v], 1);
+    EXPECT_EQ(three.members[three.offsets[v]], int(v));  // itself first
+    for (int k = three.offsets[v]; k < three.offsets[v + 1]; ++k) {
+      const int u = three.members[k];
+      // Only the same wall: a corner (45 degrees off) joins no side's patch, nor a side a
+      // corner's; within 3 edges along the wall.
+      EXPECT_GE(three.normal[u].dot(three.normal[v]), 0.79f);
+      EXPECT_LE((m.vertices[u] - m.vertices[v]).head<2>().norm(), 3.f + 1e-5f);
+    }
+    const Eigen::Vector3f& p = m.vertices[v];
+    if (OnEastWall(p) && p.y() == 10) {
+      // The mid-wall column at y = 10: top and foot of columns 9-11 within 1 edge (the
+      // quads' diagonals join the foot of one column to the top of the next); the east
+      // wall's inner vertices (y 8-12, top and foot) all within 3, and no more than its
+      // corners beside them.
+      EXPECT_GE(n1, 4);
+      EXPECT_LE(n1, 5);
+      int inner = 0;
+      for (int k = three.offsets[v]; k < three.offsets[v + 1]; ++k)
+        inner += OnEastWall(m.vertices[three.members[k]]);
+      EXPECT_EQ(inner, 10);
+      EXPECT_LE(n3, 14);
+    }
+  }
+}
+
+TEST(PoolWallGradients, AgreeingWallsStepAsOnePatchNoiseKeepsEachVertexOwn) {
+  const TriangleMesh m = BoxOnGround();
+  const WallPatches patches = MakeWallPatches(m, BuildVertexAdjacency(m), 3);
+  const size_t nv = m.vertices.size();
+  // Across the east wall (its corners too where they lean east) every vertex says "out" by 1
+  // (and something along the wall and up, which stays); every other wall's vertices
+  // alternate +1 / -1 along their normal (no direction beyond their noise); roof and ground
+  // vertices have gradients of their own.
+  std::vector<Eigen::Vector3d> gradient(nv);
+  for (size_t v = 0; v < nv; ++v) {
+    const Eigen::Vector3f& p = m.vertices[v];
+    if (patches.normal[v].x() > 0.79f) gradient[v] = Eigen::Vector3d(1.0, 0.3, -0.2);
+    else if (!patches.normal[v].isZero())
+      gradient[v] = (int(p.x() + p.y() + p.z()) % 2 ? 1.0 : -1.0) * patches.normal[v].cast<double>();
+    else gradient[v] = Eigen::Vector3d(0.1 * double(v % 7), 0.2, -0.3);
+  }
+  std::vector<Eigen::Vector3d> pooled = gradient;
+  const size_t replaced = PoolWallGradients(patches, &pooled);
+  EXPECT_GE(replaced, 10u);  // the east wall's ten inner vertices (and corners leaning east)
+  for (size_t v = 0; v < nv; ++v) {
+    const Eigen::Vector3f& p = m.vertices[v];
+    if (OnEastWall(p)) {
+      const double n = patches.offsets[v + 1] - patches.offsets[v];
+      EXPECT_NEAR(pooled[v].x(), std::sqrt(n), 1e-9);  // sqrt(n) x the mean, 1
+      EXPECT_EQ(pooled[v].y(), 0.3);
+      EXPECT_EQ(pooled[v].z(), -0.2);
+    } else if (patches.normal[v].isZero() ||
+               ((p.x() == 7 || p.y() == 7) && patches.normal[v].x() <= 0)) {
+      // roof, ground, and the west and south walls (but a corner leaning east), whose
+      // patches are noise
+      EXPECT_EQ(pooled[v], gradient[v]) << p.transpose();
+    }
+  }
 }
 
 }  // namespace

@@ -1,0 +1,90 @@
+#include "core/refine/wall_patch.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/refine/edge_bias.h"
+
+namespace satmesh {
+
+size_t WallPatches::num_walls() const {
+  return size_t(std::count_if(normal.begin(), normal.end(),
+                              [](const Eigen::Vector3f& n) { return !n.isZero(); }));
+}
+
+WallPatches MakeWallPatches(const TriangleMesh& mesh, const VertexAdjacency& adjacency,
+                            int rings) {
+  WallPatches patches;
+  const size_t nv = mesh.vertices.size();
+  patches.normal = WallNormals(mesh);
+  const float min_dot = float(std::cos(kWallPatchMaxTurnDeg * M_PI / 180));
+  // Breadth-first over the wall vertices of the same facing, each thread over a contiguous
+  // range of vertices (their patches are joined in vertex order); `mark` holds the vertex
+  // whose patch last took a vertex.
+  const int threads = std::max(1, omp_get_max_threads());
+  std::vector<std::vector<int>> members(threads), sizes(threads);
+#pragma omp parallel num_threads(threads)
+  {
+    const int t = omp_get_thread_num();
+    const size_t begin = nv * size_t(t) / size_t(threads), end = nv * size_t(t + 1) / size_t(threads);
+    std::vector<int> mark(nv, -1), frontier, next;
+    for (size_t v = begin; v < end; ++v) {
+      const size_t before = members[t].size();
+      const Eigen::Vector3f& h = patches.normal[v];
+      if (!h.isZero()) {
+        mark[v] = int(v);
+        members[t].push_back(int(v));
+        frontier.assign(1, int(v));
+        for (int r = 0; r < rings && !frontier.empty(); ++r) {
+          next.clear();
+          for (int u : frontier) {
+            for (int k = adjacency.neighbor_offsets[u]; k < adjacency.neighbor_offsets[u + 1]; ++k) {
+              const int w = adjacency.neighbors[k];
+              if (mark[w] == int(v) || patches.normal[w].dot(h) < min_dot) continue;
+              mark[w] = int(v);
+              next.push_back(w);
+              members[t].push_back(w);
+            }
+          }
+          frontier.swap(next);
+        }
+      }
+      sizes[t].push_back(int(members[t].size() - before));
+    }
+  }
+  patches.offsets.assign(nv + 1, 0);
+  size_t v = 0;
+  for (int t = 0; t < threads; ++t) {
+    for (int n : sizes[t]) patches.offsets[v + 1] = patches.offsets[v] + n, ++v;
+    patches.members.insert(patches.members.end(), members[t].begin(), members[t].end());
+  }
+  return patches;
+}
+
+size_t PoolWallGradients(const WallPatches& patches, std::vector<Eigen::Vector3d>* gradient) {
+  const std::vector<Eigen::Vector3d> own = *gradient;
+  const long nv = long(own.size());
+  size_t pooled = 0;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : pooled)
+  for (long v = 0; v < nv; ++v) {
+    const Eigen::Vector3d h = patches.normal[v].cast<double>();
+    const int begin = patches.offsets[v], end = patches.offsets[v + 1];
+    const double n = end - begin;
+    if (n < 3) continue;  // no spread to test against
+    double sum = 0, sum2 = 0;
+    for (int k = begin; k < end; ++k) {
+      const double x = own[patches.members[k]].dot(h);
+      sum += x, sum2 += x * x;
+    }
+    const double mean = sum / n;
+    const double variance = std::max(0.0, (sum2 - n * mean * mean) / (n - 1));
+    if (std::abs(mean) < std::sqrt(variance / n)) continue;  // within one standard error
+    (*gradient)[v] += (std::sqrt(n) * mean - own[v].dot(h)) * h;
+    ++pooled;
+  }
+  return pooled;
+}
+
+}  // namespace satmesh
