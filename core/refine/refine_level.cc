@@ -409,7 +409,8 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
 
     // Gradient step: photometric part in units of GSD², thin-plate homogenised by 1/GSD².
     t0 = StageClock::now();
-    if (!wall_patches.normal.empty()) PoolWallGradients(wall_patches, &gradient);
+    if (!wall_patches.normal.empty())
+      PoolWallGradients(wall_patches, &gradient, opt.hold_unseen ? &seen : nullptr);
     const double photo_scale = opt.step * opt.alpha * gsd * gsd;
     const double smooth_scale = opt.step * opt.beta;
     const double max_move = opt.max_step_gsd * gsd;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/refine/edge_bias.h"
 
@@ -63,28 +64,39 @@ WallPatches MakeWallPatches(const TriangleMesh& mesh, const VertexAdjacency& adj
   return patches;
 }
 
-size_t PoolWallGradients(const WallPatches& patches, std::vector<Eigen::Vector3d>* gradient) {
-  const std::vector<Eigen::Vector3d> own = *gradient;
-  const long nv = long(own.size());
-  size_t pooled = 0;
-#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : pooled)
+size_t PoolWallGradients(const WallPatches& patches, std::vector<Eigen::Vector3d>* gradient,
+                         const std::vector<int>* moves) {
+  const std::vector<Eigen::Vector3d>& g = *gradient;
+  const long nv = long(g.size());
+  // Each replaced vertex's new component first (its patch reads the gradients as they came),
+  // then written.
+  std::vector<double> pooled(nv, std::numeric_limits<double>::quiet_NaN());
+  size_t replaced = 0;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : replaced)
   for (long v = 0; v < nv; ++v) {
-    const Eigen::Vector3d h = patches.normal[v].cast<double>();
+    if (moves && (*moves)[v] == 0) continue;
     const int begin = patches.offsets[v], end = patches.offsets[v + 1];
     const double n = end - begin;
-    if (n < 3) continue;  // no spread to test against
+    if (n < 3) continue;  // no spread to test against (and no wall: no patch)
+    const Eigen::Vector3d h = patches.normal[v].cast<double>();
     double sum = 0, sum2 = 0;
     for (int k = begin; k < end; ++k) {
-      const double x = own[patches.members[k]].dot(h);
+      const double x = g[patches.members[k]].dot(h);
       sum += x, sum2 += x * x;
     }
     const double mean = sum / n;
     const double variance = std::max(0.0, (sum2 - n * mean * mean) / (n - 1));
-    if (std::abs(mean) < std::sqrt(variance / n)) continue;  // within one standard error
-    (*gradient)[v] += (std::sqrt(n) * mean - own[v].dot(h)) * h;
-    ++pooled;
+    if (std::abs(mean) < kWallPatchSignificance * std::sqrt(variance / n)) continue;
+    pooled[v] = std::sqrt(n) * mean;
+    ++replaced;
   }
-  return pooled;
+#pragma omp parallel for schedule(static)
+  for (long v = 0; v < nv; ++v) {
+    if (std::isnan(pooled[v])) continue;
+    const Eigen::Vector3d h = patches.normal[v].cast<double>();
+    (*gradient)[v] += (pooled[v] - (*gradient)[v].dot(h)) * h;
+  }
+  return replaced;
 }
 
 }  // namespace satmesh

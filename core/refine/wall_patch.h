@@ -11,11 +11,11 @@
 //
 // So each wall vertex's step across its wall is taken from the patch around it: the
 // vertices of the same wall facing within its rings, whose gradients along the vertex's
-// wall normal are pooled. Their mean m over n members, where it is at least one standard
-// error from zero, replaces the vertex's own component as sqrt(n) m: the step that n
-// agreeing vertices' evidence gives, with the noise of one vertex's step (the mean's
-// standard error times sqrt(n)). Where the patch does not agree on a direction beyond its
-// noise the vertex keeps its own gradient.
+// wall normal are pooled. Their mean m over n members, where it is at least
+// kWallPatchSignificance standard errors from zero, replaces the vertex's own component as
+// sqrt(n) m: the step that n agreeing vertices' evidence gives, with the noise of one
+// vertex's step (the mean's standard error times sqrt(n)). Where the patch does not agree on
+// a direction beyond its noise the vertex keeps its own gradient.
 #include <Eigen/Core>
 
 #include <vector>
@@ -37,6 +37,14 @@ struct WallPatches {
 // A neighbour within the rings joins a patch where its wall normal turns by at most this.
 inline constexpr double kWallPatchMaxTurnDeg = 37.0;
 
+// A patch's mean replaces a vertex's component where it is at least this many standard
+// errors from zero. Under no true direction sqrt(n) m is as noisy as one vertex's component
+// but moves the whole patch as one; at 1 standard error (32% of noise patches pass) walls
+// started on the truth drifted (stereo 0.5 m seed 71 from the true DSM: F 74.2 -> 73.5,
+// facades 64.0 -> 63.1%), at 2 (5% pass) they stay (74.2, 64.1%) and a DSM start's walls
+// still come in (docs/benchmarks-history.md, session 44).
+inline constexpr double kWallPatchSignificance = 2.0;
+
 // Wall faces are those of WallVertices (edge_bias.h, steeper than 60 degrees); a vertex's
 // wall normal is its wall faces' area-weighted horizontal normal. rings 0: each patch is
 // its vertex alone.
@@ -45,7 +53,10 @@ WallPatches MakeWallPatches(const TriangleMesh& mesh, const VertexAdjacency& adj
 
 // `gradient` (per vertex, 3D) with each wall vertex's component along its wall normal
 // replaced by its patch's pooled component (above). Other components and other vertices
-// are kept. Returns the number of vertices whose component was replaced.
-size_t PoolWallGradients(const WallPatches& patches, std::vector<Eigen::Vector3d>* gradient);
+// are kept, and so are vertices `moves` (per vertex; null: all) marks 0 (the level holds
+// them: no pair-direction sees them). Returns the number of vertices whose component was
+// replaced.
+size_t PoolWallGradients(const WallPatches& patches, std::vector<Eigen::Vector3d>* gradient,
+                         const std::vector<int>* moves = nullptr);
 
 }  // namespace satmesh
