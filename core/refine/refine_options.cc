@@ -249,8 +249,10 @@ int ResolveZnccWindowRadius(const RefineOptions& options, size_t num_pairs) {
 // One pair, stereo 0.5 m, 14 seeds: under overhangs @0.5 m +0.3 to +1.6 points (mean +0.7),
 // facades -0.3 to +1.3 (+0.4), F -0.1 to +0.8 (+0.4), roofs NMAD and perc-68 within
 // 0.003 m; 0.3 and 0.4 m, 4 seeds: facades +0.4 to +0.8, F +0.4 to +0.5; the Pleiades
-// held-out pairs within 0.0004. Tri-stereo and multi-date (their pairs move their walls
-// themselves): facades 4-9 points lower, F to -6 (docs/benchmarks-history.md, session 44).
+// held-out pairs within 0.0004. Tri-stereo and multi-date, whose pairs move their walls
+// themselves (`--set wall_patch_rings=3`, tri-stereo s2, multi-date s1 / s2 at 0.5 m):
+// under overhangs +1.1 to +2.4 but facades to -2.0 and F to -1.1
+// (docs/benchmarks-history.md, session 44).
 int ResolveWallPatchRings(const RefineOptions& options, size_t num_pairs) {
   if (options.wall_patch_rings >= 0) return options.wall_patch_rings;
   return num_pairs == 1 ? 3 : 0;

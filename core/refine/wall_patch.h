@@ -7,7 +7,7 @@
 // 0.5 m seed 71: its east walls moved 0.16 m by the images, a coarse level's few unknowns
 // moved them as one and 0.24 m further; docs/benchmarks-history.md, session 43). Several
 // pairs move them themselves (multi-date: to the objective's optimum), and pooling there
-// cost 5-9 points of facades (session 44).
+// cost up to 2 points of facades and 1 of F (session 44).
 //
 // So each wall vertex's step across its wall is taken from the patch around it: the
 // vertices of the same wall facing within its rings, whose gradients along the vertex's
