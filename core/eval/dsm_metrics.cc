@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "core/common/error.h"
-#include "core/eval/stats.h"
+#include "core/common/stats.h"
 
 namespace satmesh {
 namespace {

@@ -7,7 +7,7 @@
 #include <random>
 
 #include "core/common/error.h"
-#include "core/eval/stats.h"
+#include "core/common/stats.h"
 #include "core/raycast/ray_scene.h"
 
 namespace satmesh {

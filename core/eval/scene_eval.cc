@@ -10,7 +10,7 @@
 #include "core/common/error.h"
 #include "core/dsm/dsm.h"
 #include "core/eval/scene_views.h"
-#include "core/eval/stats.h"
+#include "core/common/stats.h"
 #include "core/eval/surface_distance.h"
 #include "core/mesh/mesh_io.h"
 

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "core/common/error.h"
+#include "core/common/stats.h"
 #include "core/dsm/dsm.h"
 #include "core/mesh/mesh_clean.h"
 #include "core/mesh/mesh_io.h"
@@ -33,13 +34,6 @@ struct TileDsm {
 
 TileDsm LoadTileDsm(const std::string& out_dir, const PlannedTile& tile) {
   return TileDsm{ReadDsm((fs::path(out_dir) / TileDsmPath(tile)).string()), tile.padded_cells};
-}
-
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const auto k = v.begin() + std::min(v.size() - 1, size_t(q * double(v.size())));
-  std::nth_element(v.begin(), k, v.end());
-  return *k;
 }
 
 SeamStats Stats(const std::string& a, const std::string& b, const std::vector<double>& diffs) {

@@ -1,5 +1,5 @@
 #pragma once
-// Small order statistics shared by the eval module (internal).
+// Small order statistics shared by the eval and tiling modules.
 #include <vector>
 
 namespace satmesh {

@@ -1,4 +1,4 @@
-#include "core/eval/stats.h"
+#include "core/common/stats.h"
 
 #include <algorithm>
 #include <cmath>
