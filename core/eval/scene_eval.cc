@@ -8,9 +8,9 @@
 #include <numeric>
 
 #include "core/common/error.h"
+#include "core/common/stats.h"
 #include "core/dsm/dsm.h"
 #include "core/eval/scene_views.h"
-#include "core/common/stats.h"
 #include "core/eval/surface_distance.h"
 #include "core/mesh/mesh_io.h"
 
