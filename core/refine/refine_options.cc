@@ -47,7 +47,7 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"wall_patch_rings", &R::wall_patch_rings, Range::In(-1, 8),
        "at level 0 a wall vertex's step across its wall (faces steeper than 60 degrees) pools "
        "the gradients of the vertices of its wall within this many edges, where they agree "
-       "beyond their noise: one pair's walls move as patches; 0: off; -1: 3 where one pair "
+       "beyond their noise: one pair's walls move as patches; 0: off; -1: 4 where one pair "
        "refines the surface, else off (several pairs move their walls themselves)"},
       {"step", &R::step, Range::Above(0), "gradient step, in units of (level GSD)^2"},
       {"max_step_gsd", &R::max_step_gsd, Range::Above(0),
@@ -246,16 +246,16 @@ int ResolveZnccWindowRadius(const RefineOptions& options, size_t num_pairs) {
 }
 
 
-// One pair, stereo 0.5 m, 14 seeds: under overhangs @0.5 m +0.3 to +1.6 points (mean +0.7),
-// facades -0.3 to +1.3 (+0.4), F -0.1 to +0.8 (+0.4), roofs NMAD and perc-68 within
-// 0.003 m; 0.3 and 0.4 m, 4 seeds: facades +0.4 to +0.8, F +0.4 to +0.5; the Pleiades
-// held-out pairs within 0.0004. Tri-stereo and multi-date, whose pairs move their walls
-// themselves (`--set wall_patch_rings=3`, tri-stereo s2, multi-date s1 / s2 at 0.5 m):
-// under overhangs +1.1 to +2.4 but facades to -2.0 and F to -1.1
-// (docs/benchmarks-history.md, session 44).
+// One pair, stereo 0.5 m, 14 seeds (4 rings against none): under overhangs @0.5 m +0.6 to
+// +2.1 points (mean +1.1), facades -0.4 to +1.8 (+0.7), F -0.1 to +1.1 (+0.5), roofs NMAD and
+// perc-68 within 0.004 m; 0.3 and 0.4 m, 4 seeds: facades +0.5 to +0.9, F +0.4 to +0.6; the
+// Pleiades held-out pairs within 0.0003. 3 rings: under overhangs 0.2-0.5 points less on
+// every seed; 5: as 4. Tri-stereo and multi-date, whose pairs move their walls themselves
+// (`--set wall_patch_rings=3`, tri-stereo s2, multi-date s1 / s2 at 0.5 m): under overhangs
+// +1.1 to +2.4 but facades to -2.0 and F to -1.1 (docs/benchmarks-history.md, session 44).
 int ResolveWallPatchRings(const RefineOptions& options, size_t num_pairs) {
   if (options.wall_patch_rings >= 0) return options.wall_patch_rings;
-  return num_pairs == 1 ? 3 : 0;
+  return num_pairs == 1 ? 4 : 0;
 }
 
 }  // namespace satmesh

@@ -48,7 +48,7 @@ struct RefineOptions {
   int wall_patch_rings = -1;       // at level 0 a wall vertex's step across its wall pools the
                                    // gradients of its wall's vertices within this many edges
                                    // (wall_patch.h: one pair's walls move as patches); 0: off;
-                                   // -1: 3 where one pair refines the surface, else off
+                                   // -1: 4 where one pair refines the surface, else off
   double step = 0.5;               // gradient step, in units of (level GSD)²
   double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD
   double momentum = 0.5;           // each vertex's move adds this x the move its last two
@@ -259,7 +259,7 @@ int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cel
 // theirs: its window takes twice the pixels against the images' noise.
 int ResolveZnccWindowRadius(const RefineOptions& options, size_t num_pairs);
 
-// The wall patches' rings: options.wall_patch_rings, or for -1 3 where one pair refines the
+// The wall patches' rings: options.wall_patch_rings, or for -1 4 where one pair refines the
 // surface and 0 (off) otherwise: several pairs move their walls themselves (wall_patch.h).
 int ResolveWallPatchRings(const RefineOptions& options, size_t num_pairs);
 
