@@ -245,7 +245,6 @@ int ResolveZnccWindowRadius(const RefineOptions& options, size_t num_pairs) {
   return num_pairs == 1 ? 3 : 2;
 }
 
-
 // One pair, stereo 0.5 m, 14 seeds (4 rings against none): under overhangs @0.5 m +0.6 to
 // +2.1 points (mean +1.1), facades -0.4 to +1.8 (+0.7), F -0.1 to +1.1 (+0.5), roofs NMAD and
 // perc-68 within 0.004 m; 0.3 and 0.4 m, 4 seeds: facades +0.5 to +0.9, F +0.4 to +0.6; the

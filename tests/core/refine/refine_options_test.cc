@@ -129,6 +129,22 @@ TEST(RefineOptions, ZnccWindowIsLargerForOnePairUnlessSet) {
   ExpectOnlyWireNames(o.Check());
 }
 
+// One pair's walls move as patches (wall_patch.h); more pairs move their walls themselves.
+TEST(RefineOptions, WallPatchRingsFromThePairs) {
+  RefineOptions o;
+  EXPECT_EQ(o.wall_patch_rings, -1);
+  EXPECT_EQ(ResolveWallPatchRings(o, 1), 4);
+  EXPECT_EQ(ResolveWallPatchRings(o, 2), 0);
+  EXPECT_EQ(ResolveWallPatchRings(o, 39), 0);
+  o.wall_patch_rings = 2;
+  EXPECT_EQ(ResolveWallPatchRings(o, 1), 2);
+  EXPECT_EQ(ResolveWallPatchRings(o, 3), 2);  // the user's choice with any pairs
+  o.wall_patch_rings = 0;
+  EXPECT_EQ(ResolveWallPatchRings(o, 1), 0);
+  o.wall_patch_rings = 9;
+  EXPECT_EQ(o.Check().rfind("wall_patch_rings must be", 0), 0u) << o.Check();
+}
+
 TEST(RefineOptions, NanIsOutOfRange) {
   RefineOptions o;
   o.alpha = std::nan("");
