@@ -218,5 +218,44 @@ TEST(PoolWallGradients, AgreeingWallsStepAsOnePatchNoiseKeepsEachVertexOwn) {
   }
 }
 
+// The gate: a patch whose mean is within 2 standard errors of zero leaves its vertex's own
+// component (at 1 standard error a third of the patches with no direction would pass and
+// move a wall as one); beyond 2 it is replaced. The east wall's inner vertices across it
+// 0.65 +-1 (alternating), its corners and the other walls 0.
+TEST(PoolWallGradients, OnlyBeyondTwoStandardErrors) {
+  const TriangleMesh m = BoxOnGround();
+  const WallPatches patches = MakeWallPatches(m, BuildVertexAdjacency(m), 4);
+  const size_t nv = m.vertices.size();
+  std::vector<Eigen::Vector3d> gradient(nv, Eigen::Vector3d::Zero());
+  for (size_t v = 0; v < nv; ++v) {
+    const Eigen::Vector3f& p = m.vertices[v];
+    if (OnEastWall(p)) gradient[v].x() = 0.65 + (int(p.y() + p.z()) % 2 ? 1.0 : -1.0);
+  }
+  std::vector<Eigen::Vector3d> pooled = gradient;
+  PoolWallGradients(patches, &pooled);
+  int between = 0, beyond = 0;
+  for (size_t v = 0; v < nv; ++v) {
+    if (!OnEastWall(m.vertices[v])) continue;
+    const Eigen::Vector3d h = patches.normal[v].cast<double>();
+    double sum = 0, sum2 = 0;
+    const int begin = patches.offsets[v], end = patches.offsets[v + 1];
+    for (int k = begin; k < end; ++k) {
+      const double x = gradient[patches.members[k]].dot(h);
+      sum += x, sum2 += x * x;
+    }
+    const double n = end - begin, mean = sum / n;
+    const double z = std::abs(mean) / std::sqrt((sum2 - n * mean * mean) / (n - 1) / n);
+    if (z >= 2) {
+      ++beyond;
+      EXPECT_NEAR(pooled[v].dot(h), std::sqrt(n) * mean, 1e-9) << m.vertices[v].transpose();
+    } else {
+      between += z >= 1;
+      EXPECT_EQ(pooled[v], gradient[v]) << m.vertices[v].transpose() << " z " << z;
+    }
+  }
+  EXPECT_GT(beyond, 0);
+  EXPECT_GT(between, 0);  // patches 1-2 standard errors out: the test tells 1 from 2
+}
+
 }  // namespace
 }  // namespace satmesh
