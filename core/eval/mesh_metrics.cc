@@ -107,7 +107,13 @@ SurfaceSamples SampleSurface(const TriangleMesh& mesh, const SampleOptions& opti
   return s;
 }
 
-std::vector<uint8_t> UnderOverhang(const TriangleMesh& mesh, const SurfaceSamples& samples) {
+namespace {
+
+// UnderOverhang, SeenByViews and MeasureFacadeOffsets over a scene of `mesh` the caller
+// built (EvaluateMesh3d builds one per surface for all three).
+
+std::vector<uint8_t> UnderOverhangIn(const TriangleMesh& mesh, const RayScene& scene,
+                                     const SurfaceSamples& samples) {
   std::vector<uint8_t> covered(samples.points.size(), 0);
   if (samples.points.empty() || mesh.faces.empty()) return covered;
   std::vector<Ray> rays(samples.points.size());
@@ -115,17 +121,17 @@ std::vector<uint8_t> UnderOverhang(const TriangleMesh& mesh, const SurfaceSample
     rays[k].origin = (samples.points[k] - mesh.origin).cast<float>() + 0.1f * samples.normals[k];
     rays[k].direction = Eigen::Vector3f::UnitZ();
   }
-  RayScene(mesh).Occluded(rays.data(), covered.data(), rays.size());
+  scene.Occluded(rays.data(), covered.data(), rays.size());
   return covered;
 }
 
-std::vector<uint8_t> SeenByViews(const TriangleMesh& mesh, const SurfaceSamples& samples,
-                                 const ViewDirections& directions, int min_views, double min_cos) {
+std::vector<uint8_t> SeenByViewsIn(const TriangleMesh& mesh, const RayScene& scene,
+                                   const SurfaceSamples& samples, const ViewDirections& directions,
+                                   int min_views, double min_cos) {
   const size_t n = samples.points.size();
   std::vector<uint8_t> seen(n, 0);
   if (n == 0 || mesh.faces.empty()) return seen;
   std::vector<uint8_t> count(n, 0);
-  const RayScene scene(mesh);
   std::vector<Ray> rays;
   std::vector<size_t> index;
   std::vector<uint8_t> occluded;
@@ -153,8 +159,9 @@ std::vector<uint8_t> SeenByViews(const TriangleMesh& mesh, const SurfaceSamples&
   return seen;
 }
 
-FacadeOffsets MeasureFacadeOffsets(const TriangleMesh& result, const SurfaceSamples& samples,
-                                   const std::vector<uint8_t>& is_facade, double max_offset_m) {
+FacadeOffsets FacadeOffsetsIn(const TriangleMesh& result, const RayScene& scene,
+                              const SurfaceSamples& samples, const std::vector<uint8_t>& is_facade,
+                              double max_offset_m) {
   SATMESH_CHECK(is_facade.size() == samples.points.size(), ErrorCode::kInvalidArgument,
                 "MeasureFacadeOffsets: " + std::to_string(is_facade.size()) + " flags for " +
                     std::to_string(samples.points.size()) + " samples");
@@ -173,7 +180,7 @@ FacadeOffsets MeasureFacadeOffsets(const TriangleMesh& result, const SurfaceSamp
   f.num_samples = rays.size() / 2;
   if (rays.empty() || result.faces.empty()) return f;
   std::vector<RayHit> hits(rays.size());
-  RayScene(result).Intersect(rays.data(), hits.data(), rays.size());
+  scene.Intersect(rays.data(), hits.data(), rays.size());
   std::vector<double> offsets;
   for (size_t i = 0; i < f.num_samples; ++i) {
     const RayHit &out = hits[2 * i], &in = hits[2 * i + 1];
@@ -194,11 +201,28 @@ FacadeOffsets MeasureFacadeOffsets(const TriangleMesh& result, const SurfaceSamp
   return f;
 }
 
+}  // namespace
+
+std::vector<uint8_t> UnderOverhang(const TriangleMesh& mesh, const SurfaceSamples& samples) {
+  return UnderOverhangIn(mesh, RayScene(mesh), samples);
+}
+
+std::vector<uint8_t> SeenByViews(const TriangleMesh& mesh, const SurfaceSamples& samples,
+                                 const ViewDirections& directions, int min_views, double min_cos) {
+  return SeenByViewsIn(mesh, RayScene(mesh), samples, directions, min_views, min_cos);
+}
+
+FacadeOffsets MeasureFacadeOffsets(const TriangleMesh& result, const SurfaceSamples& samples,
+                                   const std::vector<uint8_t>& is_facade, double max_offset_m) {
+  return FacadeOffsetsIn(result, RayScene(result), samples, is_facade, max_offset_m);
+}
+
 namespace {
 
 // The facade samples at least two views see on their own surface: the metric's selection.
-std::vector<uint8_t> SeenFacade(const TriangleMesh& mesh, const SurfaceSamples& samples,
-                                const std::vector<uint8_t>& is_facade, const ViewDirectionsFn& views) {
+std::vector<uint8_t> SeenFacade(const TriangleMesh& mesh, const RayScene& scene,
+                                const SurfaceSamples& samples, const std::vector<uint8_t>& is_facade,
+                                const ViewDirectionsFn& views) {
   SurfaceSamples facade;
   std::vector<size_t> index;
   for (size_t k = 0; k < samples.points.size(); ++k)
@@ -209,7 +233,8 @@ std::vector<uint8_t> SeenFacade(const TriangleMesh& mesh, const SurfaceSamples& 
     }
   std::vector<uint8_t> selected(samples.points.size(), 0);
   if (index.empty()) return selected;
-  const std::vector<uint8_t> seen = SeenByViews(mesh, facade, views(facade.points));
+  const std::vector<uint8_t> seen =
+      SeenByViewsIn(mesh, scene, facade, views(facade.points), kSeenMinViews, kSeenMinCos);
   for (size_t i = 0; i < index.size(); ++i) selected[index[i]] = seen[i];
   return selected;
 }
@@ -228,15 +253,19 @@ Mesh3dMetrics EvaluateMesh3d(const TriangleMesh& result, const TriangleMesh& tru
       SurfaceDistance(truth, options.backend).Distances(s_result.points, max_d);
   const std::vector<float> d_truth =
       SurfaceDistance(result, options.backend).Distances(s_truth.points, max_d);
+  // One ray scene per surface for the overhangs, the offsets and the views.
+  const RayScene result_scene(result), truth_scene(truth);
   Mesh3dMetrics m;
   m.all = Scores(d_result, {}, d_truth, {}, options.thresholds_m);
   m.facade = Scores(d_result, facade_result, d_truth, facade_truth, options.thresholds_m);
-  m.under_overhang = Scores(d_result, UnderOverhang(result, s_result), d_truth,
-                            UnderOverhang(truth, s_truth), options.thresholds_m);
-  m.facade_offset = MeasureFacadeOffsets(result, s_truth, facade_truth, kFacadeOffsetMaxM);
+  m.under_overhang = Scores(d_result, UnderOverhangIn(result, result_scene, s_result), d_truth,
+                            UnderOverhangIn(truth, truth_scene, s_truth), options.thresholds_m);
+  m.facade_offset =
+      FacadeOffsetsIn(result, result_scene, s_truth, facade_truth, kFacadeOffsetMaxM);
   if (views && *views) {
-    m.seen_facade = Scores(d_result, SeenFacade(result, s_result, facade_result, *views), d_truth,
-                           SeenFacade(truth, s_truth, facade_truth, *views), options.thresholds_m);
+    m.seen_facade = Scores(d_result, SeenFacade(result, result_scene, s_result, facade_result, *views),
+                           d_truth, SeenFacade(truth, truth_scene, s_truth, facade_truth, *views),
+                           options.thresholds_m);
   }
   return m;
 }
