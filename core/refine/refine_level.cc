@@ -11,6 +11,7 @@
 #include "core/mesh/topology.h"
 #include "core/raycast/ray_scene.h"
 #include "core/refine/edge_bias.h"
+#include "core/refine/gradient_patch.h"
 #include "core/refine/height_confidence.h"
 #include "core/refine/hit_map_raster.h"
 #include "core/refine/momentum.h"
@@ -18,7 +19,6 @@
 #include "core/refine/sunlight.h"
 #include "core/refine/thin_plate.h"
 #include "core/refine/view_level.h"
-#include "core/refine/wall_patch.h"
 
 namespace satmesh {
 namespace {
@@ -319,9 +319,13 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   std::vector<Eigen::Vector3f> move_before(last_move.size(), Eigen::Vector3f::Zero());
   // wall_patch_rings (resolved by Refine): the patches of the level's start, whose faces
   // keep their facing while the walls move a fraction of a metre.
-  const WallPatches wall_patches = level == 0 && opt.wall_patch_rings > 0
-                                       ? MakeWallPatches(*mesh, adjacency, opt.wall_patch_rings)
-                                       : WallPatches{};
+  const GradientPatches wall_patches =
+      level == 0 && opt.wall_patch_rings > 0
+          ? MakeWallPatches(*mesh, adjacency, opt.wall_patch_rings)
+          : GradientPatches{};
+  // roof_patch_rings: made once the first pass has measured which vertices the images
+  // constrain weakly (prior_weight); none without the pull towards the start.
+  GradientPatches roof_patches;
 
   for (int it = 0; it < passes; ++it) {
     ctx.progress.ThrowIfCancelled();
@@ -379,6 +383,11 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       confidence = HeightConfidenceFromInformation(information, noise_variance, gsd, opt, &stats);
     if (it == 0 && initial_prior)
       prior_weight = InitialPriorWeights(information, noise_variance, opt.initial_sigma_gsd * gsd);
+    if (it == 0 && initial_prior && level == 0 && opt.roof_patch_rings > 0) {
+      roof_patches = MakeRoofPatches(*mesh, adjacency, opt.roof_patch_rings, prior_weight);
+      spdlog::info("level 0: {} of {} vertices are roof or ground the images constrain weakly: "
+                   "they step with their planes' patches", roof_patches.num_patches(), nv);
+    }
     stats.mean_zncc.push_back(zncc);
     stats.pair_directions += int(group_pairs.size()) * (half ? 1 : 2);
     stats.times.gradient_s += SecondsSince(t0);
@@ -410,7 +419,9 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     // Gradient step: photometric part in units of GSD², thin-plate homogenised by 1/GSD².
     t0 = StageClock::now();
     if (!wall_patches.normal.empty())
-      PoolWallGradients(wall_patches, &gradient, opt.hold_unseen ? &seen : nullptr);
+      PoolPatchGradients(wall_patches, &gradient, opt.hold_unseen ? &seen : nullptr);
+    if (!roof_patches.normal.empty())
+      PoolPatchGradients(roof_patches, &gradient, opt.hold_unseen ? &seen : nullptr);
     const double photo_scale = opt.step * opt.alpha * gsd * gsd;
     const double smooth_scale = opt.step * opt.beta;
     const double max_move = opt.max_step_gsd * gsd;

@@ -49,6 +49,11 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "the gradients of the vertices of its wall within this many edges, where they agree "
        "beyond their noise: one pair's walls move as patches; 0: off; -1: 4 where one pair "
        "refines the surface, else off (several pairs move their walls themselves)"},
+      {"roof_patch_rings", &R::roof_patch_rings, Range::In(0, 8),
+       "at level 0 a roof or ground vertex the images constrain less than the initial "
+       "surface's sigma does (its pull weight at least 0.5) takes its step along its normal "
+       "from the vertices of its plane within this many edges, where they agree beyond their "
+       "noise: weakly textured roofs move with their edges; 0: off"},
       {"step", &R::step, Range::Above(0), "gradient step, in units of (level GSD)^2"},
       {"max_step_gsd", &R::max_step_gsd, Range::Above(0),
        "clamp of one vertex's move per iteration, in level GSD"},

@@ -47,8 +47,12 @@ struct RefineOptions {
                                    // +3.8 points, but 0.3 m F -0.8; BENCHMARKS.md); 1: uniform
   int wall_patch_rings = -1;       // at level 0 a wall vertex's step across its wall pools the
                                    // gradients of its wall's vertices within this many edges
-                                   // (wall_patch.h: one pair's walls move as patches); 0: off;
+                                   // (gradient_patch.h: one pair's walls move as patches); 0: off;
                                    // -1: 4 where one pair refines the surface, else off
+  int roof_patch_rings = 4;        // at level 0 a roof or ground vertex the images constrain
+                                   // less than the initial surface's sigma does takes its step
+                                   // along its normal from its plane's vertices within this many
+                                   // edges (gradient_patch.h); 0: off
   double step = 0.5;               // gradient step, in units of (level GSD)²
   double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD
   double momentum = 0.5;           // each vertex's move adds this x the move its last two
@@ -260,7 +264,7 @@ int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cel
 int ResolveZnccWindowRadius(const RefineOptions& options, size_t num_pairs);
 
 // The wall patches' rings: options.wall_patch_rings, or for -1 4 where one pair refines the
-// surface and 0 (off) otherwise: several pairs move their walls themselves (wall_patch.h).
+// surface and 0 (off) otherwise: several pairs move their walls themselves (gradient_patch.h).
 int ResolveWallPatchRings(const RefineOptions& options, size_t num_pairs);
 
 }  // namespace satmesh

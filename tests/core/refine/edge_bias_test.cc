@@ -1,5 +1,6 @@
-// Walls moved inward by the photometric term's occluding-edge bias (edge_bias.h), and one
-// pair's walls moved as patches (wall_patch.h).
+// Walls moved inward by the photometric term's occluding-edge bias (edge_bias.h), and the
+// gradients pooled over patches: one pair's walls, weakly constrained roofs and ground
+// (gradient_patch.h).
 #include "core/refine/edge_bias.h"
 
 #include <gtest/gtest.h>
@@ -10,7 +11,7 @@
 #include <tuple>
 
 #include "core/mesh/topology.h"
-#include "core/refine/wall_patch.h"
+#include "core/refine/gradient_patch.h"
 
 namespace satmesh {
 namespace {
@@ -146,9 +147,9 @@ TEST(WallNormals, FaceOutOfTheBoxAndIntoTheCornerNoneOffTheWalls) {
 TEST(MakeWallPatches, HoldTheVerticesOfTheSameFacingWithinTheRings) {
   const TriangleMesh m = BoxOnGround();
   const VertexAdjacency adjacency = BuildVertexAdjacency(m);
-  const WallPatches one = MakeWallPatches(m, adjacency, 1);
-  const WallPatches three = MakeWallPatches(m, adjacency, 3);
-  const WallPatches alone = MakeWallPatches(m, adjacency, 0);
+  const GradientPatches one = MakeWallPatches(m, adjacency, 1);
+  const GradientPatches three = MakeWallPatches(m, adjacency, 3);
+  const GradientPatches alone = MakeWallPatches(m, adjacency, 0);
   EXPECT_EQ(three.num_walls(), 48u);
   for (size_t v = 0; v < m.vertices.size(); ++v) {
     const int n1 = one.offsets[v + 1] - one.offsets[v];
@@ -183,9 +184,9 @@ TEST(MakeWallPatches, HoldTheVerticesOfTheSameFacingWithinTheRings) {
   }
 }
 
-TEST(PoolWallGradients, AgreeingWallsStepAsOnePatchNoiseKeepsEachVertexOwn) {
+TEST(PoolPatchGradients, AgreeingWallsStepAsOnePatchNoiseKeepsEachVertexOwn) {
   const TriangleMesh m = BoxOnGround();
-  const WallPatches patches = MakeWallPatches(m, BuildVertexAdjacency(m), 3);
+  const GradientPatches patches = MakeWallPatches(m, BuildVertexAdjacency(m), 3);
   const size_t nv = m.vertices.size();
   // Across the east wall (its corners too where they lean east) every vertex says "out" by 1
   // (and something along the wall and up, which stays); every other wall's vertices
@@ -200,7 +201,7 @@ TEST(PoolWallGradients, AgreeingWallsStepAsOnePatchNoiseKeepsEachVertexOwn) {
     else gradient[v] = Eigen::Vector3d(0.1 * double(v % 7), 0.2, -0.3);
   }
   std::vector<Eigen::Vector3d> pooled = gradient;
-  const size_t replaced = PoolWallGradients(patches, &pooled);
+  const size_t replaced = PoolPatchGradients(patches, &pooled);
   EXPECT_GE(replaced, 10u);  // the east wall's ten inner vertices (and corners leaning east)
   for (size_t v = 0; v < nv; ++v) {
     const Eigen::Vector3f& p = m.vertices[v];
@@ -222,9 +223,9 @@ TEST(PoolWallGradients, AgreeingWallsStepAsOnePatchNoiseKeepsEachVertexOwn) {
 // component (at 1 standard error a third of the patches with no direction would pass and
 // move a wall as one); beyond 2 it is replaced. The east wall's inner vertices across it
 // 0.65 +-1 (alternating), its corners and the other walls 0.
-TEST(PoolWallGradients, OnlyBeyondTwoStandardErrors) {
+TEST(PoolPatchGradients, OnlyBeyondTwoStandardErrors) {
   const TriangleMesh m = BoxOnGround();
-  const WallPatches patches = MakeWallPatches(m, BuildVertexAdjacency(m), 4);
+  const GradientPatches patches = MakeWallPatches(m, BuildVertexAdjacency(m), 4);
   const size_t nv = m.vertices.size();
   std::vector<Eigen::Vector3d> gradient(nv, Eigen::Vector3d::Zero());
   for (size_t v = 0; v < nv; ++v) {
@@ -232,7 +233,7 @@ TEST(PoolWallGradients, OnlyBeyondTwoStandardErrors) {
     if (OnEastWall(p)) gradient[v].x() = 0.65 + (int(p.y() + p.z()) % 2 ? 1.0 : -1.0);
   }
   std::vector<Eigen::Vector3d> pooled = gradient;
-  PoolWallGradients(patches, &pooled);
+  PoolPatchGradients(patches, &pooled);
   int between = 0, beyond = 0;
   for (size_t v = 0; v < nv; ++v) {
     if (!OnEastWall(m.vertices[v])) continue;
@@ -255,6 +256,64 @@ TEST(PoolWallGradients, OnlyBeyondTwoStandardErrors) {
   }
   EXPECT_GT(beyond, 0);
   EXPECT_GT(between, 0);  // patches 1-2 standard errors out: the test tells 1 from 2
+}
+
+// Roof patches: a roof or ground vertex whose pull weight is at least 0.5 (its images
+// constrain it less than the initial surface does) pools its plane's gradients along its
+// normal; one the images constrain, and every wall vertex, keeps its own.
+TEST(MakeRoofPatches, WeakVerticesPoolTheirPlaneOthersKeepTheirOwn) {
+  const TriangleMesh m = BoxOnGround();
+  const size_t nv = m.vertices.size();
+  const GradientPatches walls = MakeWallPatches(m, BuildVertexAdjacency(m), 0);
+  // The roof's inner vertices (x, y in 8-12) weak but for x = 12 (0.49, just under); the
+  // ground weak at x < 3, constrained elsewhere; the walls' vertices weak too.
+  std::vector<float> prior_weight(nv, 0.f);
+  for (size_t v = 0; v < nv; ++v) {
+    const Eigen::Vector3f& p = m.vertices[v];
+    if (p.z() == 5) prior_weight[v] = p.x() == 12 ? 0.49f : 0.5f;
+    if (p.z() == 0 && p.x() < 3) prior_weight[v] = 1.f;
+    if (!walls.normal[v].isZero()) prior_weight[v] = 1.f;
+  }
+  const GradientPatches roofs = MakeRoofPatches(m, BuildVertexAdjacency(m), 2, prior_weight);
+  std::vector<Eigen::Vector3d> gradient(nv);
+  for (size_t v = 0; v < nv; ++v) {
+    const Eigen::Vector3f& p = m.vertices[v];
+    // The roof says "down" by 1 (and something sideways, which stays); the ground
+    // alternates +-1 (noise).
+    gradient[v] = p.z() == 5 ? Eigen::Vector3d(0.2, -0.1, 1.0)
+                             : Eigen::Vector3d(0, 0, int(p.x() + p.y()) % 2 ? 1.0 : -1.0);
+  }
+  std::vector<Eigen::Vector3d> pooled = gradient;
+  const size_t replaced = PoolPatchGradients(roofs, &pooled);
+  EXPECT_EQ(replaced, 20u);  // the roof's inner 5 x 5 but x = 12
+  for (size_t v = 0; v < nv; ++v) {
+    const Eigen::Vector3f& p = m.vertices[v];
+    const int n = roofs.offsets[v + 1] - roofs.offsets[v];
+    if (!walls.normal[v].isZero()) {  // a wall's vertex: no direction, no patch
+      EXPECT_TRUE(roofs.normal[v].isZero());
+      EXPECT_EQ(pooled[v], gradient[v]);
+      continue;
+    }
+    EXPECT_NEAR(roofs.normal[v].z(), 1.f, 1e-6);
+    if (p.z() == 5 && p.x() < 12) {
+      for (int k = roofs.offsets[v]; k < roofs.offsets[v + 1]; ++k) {
+        const Eigen::Vector3f& q = m.vertices[roofs.members[k]];
+        EXPECT_EQ(q.z(), 5.f);  // its plane: not the ground beyond the walls
+        EXPECT_LE((q - p).cwiseAbs().maxCoeff(), 2.f);
+      }
+      if (p.x() == 10 && p.y() == 10) {
+        EXPECT_EQ(n, 19);  // 1 + 6 + 12 within 2 edges
+      }
+      EXPECT_NEAR(pooled[v].z(), std::sqrt(double(n)), 1e-9) << p.transpose();
+      EXPECT_EQ(pooled[v].x(), 0.2);
+      EXPECT_EQ(pooled[v].y(), -0.1);
+    } else {
+      // x = 12 on the roof (constrained), the constrained ground: no patch; the weak ground
+      // at x < 3: a patch of noise
+      EXPECT_EQ(n == 0, p.z() == 5 || p.x() >= 3) << p.transpose();
+      EXPECT_EQ(pooled[v], gradient[v]) << p.transpose();
+    }
+  }
 }
 
 }  // namespace

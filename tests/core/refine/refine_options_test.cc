@@ -129,7 +129,7 @@ TEST(RefineOptions, ZnccWindowIsLargerForOnePairUnlessSet) {
   ExpectOnlyWireNames(o.Check());
 }
 
-// One pair's walls move as patches (wall_patch.h); more pairs move their walls themselves.
+// One pair's walls move as patches (gradient_patch.h); more pairs move their walls themselves.
 TEST(RefineOptions, WallPatchRingsFromThePairs) {
   RefineOptions o;
   EXPECT_EQ(o.wall_patch_rings, -1);
@@ -143,6 +143,19 @@ TEST(RefineOptions, WallPatchRingsFromThePairs) {
   EXPECT_EQ(ResolveWallPatchRings(o, 1), 0);
   o.wall_patch_rings = 9;
   EXPECT_EQ(o.Check().rfind("wall_patch_rings must be", 0), 0u) << o.Check();
+}
+
+// Roof patches are on with any pairs (they pool only where the images constrain weakly).
+TEST(RefineOptions, RoofPatchRingsFourByDefaultZeroOff) {
+  RefineOptions o;
+  EXPECT_EQ(o.roof_patch_rings, 4);
+  EXPECT_EQ(o.Check(), "");
+  o.roof_patch_rings = 0;
+  EXPECT_EQ(o.Check(), "");
+  for (int bad : {-1, 9}) {
+    o.roof_patch_rings = bad;
+    EXPECT_EQ(o.Check().rfind("roof_patch_rings must be", 0), 0u) << o.Check();
+  }
 }
 
 TEST(RefineOptions, NanIsOutOfRange) {

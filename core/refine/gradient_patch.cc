@@ -1,4 +1,4 @@
-#include "core/refine/wall_patch.h"
+#include "core/refine/gradient_patch.h"
 
 #include <omp.h>
 
@@ -10,16 +10,19 @@
 
 namespace satmesh {
 
-size_t WallPatches::num_walls() const {
+size_t GradientPatches::num_walls() const {
   return size_t(std::count_if(normal.begin(), normal.end(),
                               [](const Eigen::Vector3f& n) { return !n.isZero(); }));
 }
 
-WallPatches MakeWallPatches(const TriangleMesh& mesh, const VertexAdjacency& adjacency,
-                            int rings) {
-  WallPatches patches;
-  const size_t nv = mesh.vertices.size();
-  patches.normal = WallNormals(mesh);
+namespace {
+
+// The patches of the vertices `centre` marks (null: all) over the directions `normal`.
+GradientPatches MakePatches(std::vector<Eigen::Vector3f> normal, const VertexAdjacency& adjacency,
+                            int rings, const std::vector<char>* centre) {
+  GradientPatches patches;
+  const size_t nv = normal.size();
+  patches.normal = std::move(normal);
   const float min_dot = float(std::cos(kWallPatchMaxTurnDeg * M_PI / 180));
   // Breadth-first over the wall vertices of the same facing, each thread over a contiguous
   // range of vertices (their patches are joined in vertex order); `mark` holds the vertex
@@ -34,7 +37,7 @@ WallPatches MakeWallPatches(const TriangleMesh& mesh, const VertexAdjacency& adj
     for (size_t v = begin; v < end; ++v) {
       const size_t before = members[t].size();
       const Eigen::Vector3f& h = patches.normal[v];
-      if (!h.isZero()) {
+      if (!h.isZero() && (!centre || (*centre)[v])) {
         mark[v] = int(v);
         members[t].push_back(int(v));
         frontier.assign(1, int(v));
@@ -64,8 +67,33 @@ WallPatches MakeWallPatches(const TriangleMesh& mesh, const VertexAdjacency& adj
   return patches;
 }
 
-size_t PoolWallGradients(const WallPatches& patches, std::vector<Eigen::Vector3d>* gradient,
-                         const std::vector<int>* moves) {
+}  // namespace
+
+size_t GradientPatches::num_patches() const {
+  size_t n = 0;
+  for (size_t v = 0; v + 1 < offsets.size(); ++v) n += offsets[v + 1] > offsets[v];
+  return n;
+}
+
+GradientPatches MakeWallPatches(const TriangleMesh& mesh, const VertexAdjacency& adjacency,
+                                int rings) {
+  return MakePatches(WallNormals(mesh), adjacency, rings, nullptr);
+}
+
+GradientPatches MakeRoofPatches(const TriangleMesh& mesh, const VertexAdjacency& adjacency,
+                                int rings, const std::vector<float>& prior_weight) {
+  std::vector<Eigen::Vector3f> normal = VertexNormals(mesh);
+  const std::vector<Eigen::Vector3f> wall = WallNormals(mesh);
+  std::vector<char> weak(normal.size(), 0);
+  for (size_t v = 0; v < normal.size(); ++v) {
+    if (!wall[v].isZero()) normal[v].setZero();
+    weak[v] = !normal[v].isZero() && prior_weight[v] >= kRoofPatchMinPriorWeight;
+  }
+  return MakePatches(std::move(normal), adjacency, rings, &weak);
+}
+
+size_t PoolPatchGradients(const GradientPatches& patches, std::vector<Eigen::Vector3d>* gradient,
+                          const std::vector<int>* moves) {
   const std::vector<Eigen::Vector3d>& g = *gradient;
   const long nv = long(g.size());
   // Each replaced vertex's new component first (its patch reads the gradients as they came),
