@@ -89,7 +89,9 @@ GradientPatches MakeRoofPatches(const TriangleMesh& mesh, const VertexAdjacency&
     if (!wall[v].isZero()) normal[v].setZero();
     weak[v] = !normal[v].isZero() && prior_weight[v] >= kRoofPatchMinPriorWeight;
   }
-  return MakePatches(std::move(normal), adjacency, rings, &weak);
+  GradientPatches patches = MakePatches(std::move(normal), adjacency, rings, &weak);
+  patches.step_factor = kRoofPatchStepFactor;
+  return patches;
 }
 
 size_t PoolPatchGradients(const GradientPatches& patches, std::vector<Eigen::Vector3d>* gradient,
@@ -115,7 +117,7 @@ size_t PoolPatchGradients(const GradientPatches& patches, std::vector<Eigen::Vec
     const double mean = sum / n;
     const double variance = std::max(0.0, (sum2 - n * mean * mean) / (n - 1));
     if (std::abs(mean) < kWallPatchSignificance * std::sqrt(variance / n)) continue;
-    pooled[v] = std::sqrt(n) * mean;
+    pooled[v] = patches.step_factor * std::sqrt(n) * mean;
     ++replaced;
   }
 #pragma omp parallel for schedule(static)

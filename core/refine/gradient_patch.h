@@ -28,9 +28,10 @@
 // sigma does (its pull weight at least kRoofPatchMinPriorWeight) takes its step along its
 // normal from its patch as a wall vertex does: the non-wall vertices within its rings whose
 // normals turn by at most kWallPatchMaxTurnDeg (a roof's plane, not across its ridge or
-// down its walls). A vertex the images constrain keeps its own gradient: on the Pleiades
-// triplet's textured roofs almost all do, and pooling every roof vertex there lowered the
-// held-out pairs' ZNCC (docs/benchmarks-history.md, session 45).
+// down its walls), with kRoofPatchStepFactor of the wall's step. A vertex the images
+// constrain keeps its own gradient: on the Pleiades triplet's textured roofs almost all do,
+// and pooling every roof vertex there lowered the held-out pairs' ZNCC
+// (docs/benchmarks-history.md, session 45).
 #include <Eigen/Core>
 
 #include <vector>
@@ -45,8 +46,9 @@ namespace satmesh {
 // directions are within kWallPatchMaxTurnDeg of its own, pooled along its direction
 // (compressed rows; empty where the vertex has no patch of its own).
 struct GradientPatches {
-  std::vector<Eigen::Vector3f> normal;  // per vertex; zero for a vertex of no wall face
+  std::vector<Eigen::Vector3f> normal;  // per vertex; zero: none
   std::vector<int> offsets, members;    // members of vertex v: [offsets[v], offsets[v + 1])
+  double step_factor = 1.0;             // the pooled component is this x sqrt(n) m
   size_t num_walls() const;             // vertices with a direction
   size_t num_patches() const;           // vertices with a patch of their own
 };
@@ -70,16 +72,25 @@ GradientPatches MakeWallPatches(const TriangleMesh& mesh, const VertexAdjacency&
 
 // A non-wall vertex's pull weight (InitialPriorWeights) from which it takes its patch's
 // step: 0.5, where the images alone constrain its height as much as the initial surface's
-// sigma does. Stereo 0.5 m, 5 seeds: 0.3 gives the roofs 0.002-0.009 m more than 0.5, 0 (every
-// roof vertex) 0.005-0.015 m more but seed 71's roofs 0.015 m worse than none, and each lowers the
-// Pleiades held-out pairs (0.3: -0.0002 to -0.0004; 0: -0.0005 to -0.0012; 0.5: within 0.0004;
-// docs/benchmarks-history.md, session 45).
+// sigma does. Stereo 0.5 m: pooling every roof vertex gives s2 and seed 51 0.006-0.011 m more
+// roofs than 0.5, 0.3 0.004-0.009 m, but the Pleiades pairs held out of both the s2p DSM and
+// the refinement lose 0.0010-0.0013 of their ZNCC's rise (0.3: 0.0002; 0.5: none, the DSM's
+// own pairs 0.0001-0.0002; docs/benchmarks-history.md, session 45).
 inline constexpr double kRoofPatchMinPriorWeight = 0.5;
+
+// A roof patch's pooled component is this times sqrt(n) m. Neighbouring vertices' ZNCC
+// windows overlap, so n roof vertices' gradients are not n independent measurements: the
+// full sqrt(n) m doubled the drift from a true start (stereo 0.5 m s1 from the truth mesh:
+// roofs NMAD 0.010 -> 0.019 m, F 98.7 -> 98.1; at 0.5 0.015, 98.4), where a striped gable
+// roof's periodic texture gives one pair a consistent wrong match, and keeps 65-80% of the
+// DSM starts' roof gain (s2, seeds 51 and 77; docs/benchmarks-history.md, session 45).
+inline constexpr double kRoofPatchStepFactor = 0.5;
 
 // The roof patches: a vertex of no wall face whose prior_weight (per vertex) is at least
 // kRoofPatchMinPriorWeight gets its vertex normal as its direction and the vertices of no
 // wall face within `rings` edges whose normals turn by at most kWallPatchMaxTurnDeg as its
-// patch; other vertices have none (but join the patches around them).
+// patch; other vertices have none (but join the patches around them). step_factor
+// kRoofPatchStepFactor.
 GradientPatches MakeRoofPatches(const TriangleMesh& mesh, const VertexAdjacency& adjacency,
                                 int rings, const std::vector<float>& prior_weight);
 

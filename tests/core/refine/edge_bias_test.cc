@@ -275,6 +275,8 @@ TEST(MakeRoofPatches, WeakVerticesPoolTheirPlaneOthersKeepTheirOwn) {
     if (!walls.normal[v].isZero()) prior_weight[v] = 1.f;
   }
   const GradientPatches roofs = MakeRoofPatches(m, BuildVertexAdjacency(m), 2, prior_weight);
+  EXPECT_EQ(walls.step_factor, 1.0);
+  EXPECT_EQ(roofs.step_factor, kRoofPatchStepFactor);
   std::vector<Eigen::Vector3d> gradient(nv);
   for (size_t v = 0; v < nv; ++v) {
     const Eigen::Vector3f& p = m.vertices[v];
@@ -304,7 +306,8 @@ TEST(MakeRoofPatches, WeakVerticesPoolTheirPlaneOthersKeepTheirOwn) {
       if (p.x() == 10 && p.y() == 10) {
         EXPECT_EQ(n, 19);  // 1 + 6 + 12 within 2 edges
       }
-      EXPECT_NEAR(pooled[v].z(), std::sqrt(double(n)), 1e-9) << p.transpose();
+      // half a wall's step: 0.5 sqrt(n) x the mean, 1
+      EXPECT_NEAR(pooled[v].z(), 0.5 * std::sqrt(double(n)), 1e-9) << p.transpose();
       EXPECT_EQ(pooled[v].x(), 0.2);
       EXPECT_EQ(pooled[v].y(), -0.1);
     } else {
