@@ -10,7 +10,7 @@
 
 namespace satmesh {
 
-size_t GradientPatches::num_walls() const {
+size_t GradientPatches::num_directed() const {
   return size_t(std::count_if(normal.begin(), normal.end(),
                               [](const Eigen::Vector3f& n) { return !n.isZero(); }));
 }
@@ -24,7 +24,7 @@ GradientPatches MakePatches(std::vector<Eigen::Vector3f> normal, const VertexAdj
   const size_t nv = normal.size();
   patches.normal = std::move(normal);
   const float min_dot = float(std::cos(kWallPatchMaxTurnDeg * M_PI / 180));
-  // Breadth-first over the wall vertices of the same facing, each thread over a contiguous
+  // Breadth-first over the vertices of a similar direction, each thread over a contiguous
   // range of vertices (their patches are joined in vertex order); `mark` holds the vertex
   // whose patch last took a vertex.
   const int threads = std::max(1, omp_get_max_threads());

@@ -49,11 +49,12 @@ struct GradientPatches {
   std::vector<Eigen::Vector3f> normal;  // per vertex; zero: none
   std::vector<int> offsets, members;    // members of vertex v: [offsets[v], offsets[v + 1])
   double step_factor = 1.0;             // the pooled component is this x sqrt(n) m
-  size_t num_walls() const;             // vertices with a direction
+  size_t num_directed() const;          // vertices with a direction
   size_t num_patches() const;           // vertices with a patch of their own
 };
 
-// A neighbour within the rings joins a patch where its wall normal turns by at most this.
+// A neighbour within the rings joins a patch where its direction (wall normal, or a roof
+// vertex's normal) turns by at most this.
 inline constexpr double kWallPatchMaxTurnDeg = 37.0;
 
 // A patch's mean replaces a vertex's component where it is at least this many standard

@@ -150,7 +150,7 @@ TEST(MakeWallPatches, HoldTheVerticesOfTheSameFacingWithinTheRings) {
   const GradientPatches one = MakeWallPatches(m, adjacency, 1);
   const GradientPatches three = MakeWallPatches(m, adjacency, 3);
   const GradientPatches alone = MakeWallPatches(m, adjacency, 0);
-  EXPECT_EQ(three.num_walls(), 48u);
+  EXPECT_EQ(three.num_directed(), 48u);
   for (size_t v = 0; v < m.vertices.size(); ++v) {
     const int n1 = one.offsets[v + 1] - one.offsets[v];
     const int n3 = three.offsets[v + 1] - three.offsets[v];
