@@ -107,7 +107,7 @@ size_t PoolPatchGradients(const GradientPatches& patches, std::vector<Eigen::Vec
     if (moves && (*moves)[v] == 0) continue;
     const int begin = patches.offsets[v], end = patches.offsets[v + 1];
     const double n = end - begin;
-    if (n < 3) continue;  // no spread to test against (and no wall: no patch)
+    if (n < 3) continue;  // no spread to test against (n = 0: no patch of its own)
     const Eigen::Vector3d h = patches.normal[v].cast<double>();
     double sum = 0, sum2 = 0;
     for (int k = begin; k < end; ++k) {

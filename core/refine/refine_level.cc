@@ -381,12 +381,14 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
         it == 0 && groups > 1 ? &first_energies : nullptr);
     if (it == 0 && data_confidence)
       confidence = HeightConfidenceFromInformation(information, noise_variance, gsd, opt, &stats);
-    if (it == 0 && initial_prior)
+    if (it == 0 && initial_prior) {
       prior_weight = InitialPriorWeights(information, noise_variance, opt.initial_sigma_gsd * gsd);
-    if (it == 0 && initial_prior && level == 0 && opt.roof_patch_rings > 0) {
-      roof_patches = MakeRoofPatches(*mesh, adjacency, opt.roof_patch_rings, prior_weight);
-      spdlog::info("level 0: {} of {} vertices are roof or ground the images constrain weakly: "
-                   "they step with their planes' patches", roof_patches.num_patches(), nv);
+      if (level == 0 && opt.roof_patch_rings > 0 && !measure_only) {
+        roof_patches = MakeRoofPatches(*mesh, adjacency, opt.roof_patch_rings, prior_weight);
+        spdlog::info("level 0: {} of {} vertices are roof or ground the images constrain "
+                     "weakly: they step with their planes' patches",
+                     roof_patches.num_patches(), nv);
+      }
     }
     stats.mean_zncc.push_back(zncc);
     stats.pair_directions += int(group_pairs.size()) * (half ? 1 : 2);
