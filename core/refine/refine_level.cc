@@ -16,6 +16,7 @@
 #include "core/refine/hit_map_raster.h"
 #include "core/refine/momentum.h"
 #include "core/refine/photometric_pass.h"
+#include "core/refine/plumb_walls.h"
 #include "core/refine/sunlight.h"
 #include "core/refine/thin_plate.h"
 #include "core/refine/view_level.h"
@@ -326,6 +327,15 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // roof_patch_rings: made once the first pass has measured which vertices the images
   // constrain weakly (prior_weight); none without the pull towards the start.
   GradientPatches roof_patches;
+  // plumb_walls: the walls' tops, from the level's start (none without the pull towards it,
+  // nor for a pass that only measures).
+  const PlumbLines plumb = level == 0 && initial_prior && !measure_only &&
+                                   opt.HangsWallsPlumb(ctx.input.initial_is_mesh)
+                               ? MakePlumbLines(*mesh, adjacency)
+                               : PlumbLines{};
+  if (!plumb.top.empty())
+    spdlog::info("level 0: {} wall vertices hang from their walls' tops where the images "
+                 "constrain them weakly", plumb.num_hung());
 
   for (int it = 0; it < passes; ++it) {
     ctx.progress.ThrowIfCancelled();
@@ -429,12 +439,26 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
     const double max_move = opt.max_step_gsd * gsd;
     const double directions_per_pair = (half ? 1.0 : 2.0) / (grouped ? groups : 1);
     const float* confidence_of = confidence.data();
+    // plumb_walls: each hung vertex's offset outside its top's vertical, before any moves.
+    const std::vector<float> plumb_offset = PlumbOffsets(plumb, mesh->vertices);
     // wall_beta_factor: the wall vertices (none looked for at 1, the default).
     const std::vector<char> on_wall =
         opt.wall_beta_factor < 1 ? WallVertices(*mesh) : std::vector<char>();
 #pragma omp parallel for schedule(static)
     for (long v = 0; v < long(nv); ++v) {
-      if (opt.hold_unseen && seen[v] == 0) continue;  // no image constrains it
+      // plumb_walls: across its wall a hung vertex is pulled towards its start or the
+      // vertical through its top, whichever lies further in (an arcade's wall inside its top
+      // keeps its start; below the coarsest level walls are free sideways but for the hang).
+      const bool hung = !plumb_offset.empty() && plumb.top[v] >= 0 &&
+                        !(opt.hold_boundary_xy && adjacency.is_boundary[v]);
+      const double across = !hung ? 0.0 : std::max(double(plumb_offset[v]), coarsest ?
+                            double((mesh->vertices[v] - start[v]).dot(plumb.normal[v])) : 0.0);
+      if (opt.hold_unseen && seen[v] == 0) {  // no image constrains it: held, or hung plumb
+        if (hung)
+          mesh->vertices[v] -=
+              float(kInitialPullPerIteration * prior_weight[v] * across) * plumb.normal[v];
+        continue;
+      }
       Eigen::Vector3d g = gradient[v];
       if (opt.normalize_by_pair_count && seen[v] > 1) g /= double(seen[v]);
       const double confidence =
@@ -446,6 +470,10 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       if (initial_prior) {
         Eigen::Vector3d off = (mesh->vertices[v] - start[v]).cast<double>();
         if (!coarsest) off.x() = off.y() = 0;  // below the coarsest: heights only
+        if (hung) {  // across its wall, towards the vertical through its top
+          const Eigen::Vector3d h = plumb.normal[v].cast<double>();
+          off += (across - off.dot(h)) * h;
+        }
         move -= kInitialPullPerIteration * double(prior_weight[v]) * off;
       }
       if (opt.hold_boundary_xy && adjacency.is_boundary[v]) move.x() = move.y() = 0;

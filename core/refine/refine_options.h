@@ -53,6 +53,10 @@ struct RefineOptions {
                                    // less than the initial surface's sigma does takes its step
                                    // along its normal from its plane's vertices within this many
                                    // edges (gradient_patch.h); 0: off
+  int plumb_walls = -1;            // at level 0 a weakly constrained wall vertex is pulled
+                                   // towards the vertical through its wall's top, where its
+                                   // start leans out (plumb_walls.h); 0: off; 1: on; -1: on for
+                                   // a DSM start, off for a mesh start
   double step = 0.5;               // gradient step, in units of (level GSD)²
   double max_step_gsd = 0.5;       // clamp of one vertex's move per iteration, in level GSD
   double momentum = 0.5;           // each vertex's move adds this x the move its last two
@@ -232,6 +236,10 @@ struct RefineOptions {
   // occluding_edge_bias_px resolved for a mesh start or a DSM start.
   double OccludingEdgeBiasPx(bool initial_is_mesh) const {
     return occluding_edge_bias_px < 0 ? (initial_is_mesh ? 0.0 : 0.5) : occluding_edge_bias_px;
+  }
+  // plumb_walls resolved for a mesh start or a DSM start.
+  bool HangsWallsPlumb(bool initial_is_mesh) const {
+    return plumb_walls < 0 ? !initial_is_mesh : plumb_walls > 0;
   }
   // sunlit_pairs resolved for a mesh start or a DSM start.
   bool MatchesSunlitOnly(bool initial_is_mesh) const {

@@ -158,6 +158,23 @@ TEST(RefineOptions, RoofPatchRingsFourByDefaultZeroOff) {
   }
 }
 
+// Walls hang plumb from a DSM start; a mesh start's walls are the user's model.
+TEST(RefineOptions, PlumbWallsForADsmStartNotAMeshStartByDefault) {
+  RefineOptions o;
+  EXPECT_EQ(o.plumb_walls, -1);
+  EXPECT_TRUE(o.HangsWallsPlumb(/*initial_is_mesh=*/false));
+  EXPECT_FALSE(o.HangsWallsPlumb(/*initial_is_mesh=*/true));
+  o.plumb_walls = 0;
+  EXPECT_FALSE(o.HangsWallsPlumb(false));
+  o.plumb_walls = 1;
+  EXPECT_TRUE(o.HangsWallsPlumb(true));
+  EXPECT_EQ(o.Check(), "");
+  for (int bad : {-2, 2}) {
+    o.plumb_walls = bad;
+    EXPECT_EQ(o.Check().rfind("plumb_walls must be", 0), 0u) << o.Check();
+  }
+}
+
 TEST(RefineOptions, NanIsOutOfRange) {
   RefineOptions o;
   o.alpha = std::nan("");

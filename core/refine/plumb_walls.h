@@ -1,0 +1,49 @@
+#pragma once
+// Walls hang plumb under their tops (RefineLevel, plumb_walls).
+//
+// A DSM holds a wall as a slope: its matching spreads the roof's edge over the ground in
+// front (s2p's and our generator's DSMs alike), so the initial surface's walls lean out at
+// their feet. Where two views see a wall the images move it; where one view or none does
+// (multi-date 0.5 m s2: 35% of the facades, five of its six views from the north), nothing
+// in the images says where its lower part lies, and the pull towards the initial surface
+// keeps the slope: its foot stays a metre out (completeness @0.5 m over the wall's lowest
+// fifth 7%, over its highest fifth 52%; docs/benchmarks-history.md, session 46). The wall's
+// top is the roof's edge, which the roof's views place. Buildings' walls are vertical, so a
+// wall vertex the images constrain weakly is pulled towards the vertical through the top of
+// its wall, where its start leans out, in place of its start.
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/mesh/mesh.h"
+#include "core/mesh/topology.h"
+
+namespace satmesh {
+
+// A wall vertex's next vertex up its wall: the neighbour, on a wall facing within
+// kWallPatchMaxTurnDeg of its own, whose edge rises most steeply, at least this steeply
+// (degrees from the horizontal). A DSM's wall rises at 75-85 degrees and its top is where
+// the rise eases. At 45 degrees the walk went on over real roofs' rounded shoulders (the
+// Pleiades triplet's terraces on their hill: 63 degrees over the metre behind the edge)
+// and hung their walls a metre or two behind it: the pairs held out of the refinement lost
+// 0.002-0.004 of their ZNCC's rise, at 60 degrees 0.0015, at 70 at most 0.0002; on the
+// generator's scenes 70 keeps half to all of 45's facades (80: a fifth; docs/
+// benchmarks-history.md, session 46).
+inline constexpr double kPlumbMinRiseDeg = 70.0;
+
+// Per vertex: its wall's horizontal unit normal (WallNormals; zero: no wall vertex) and the
+// top of its wall, the vertex where the walk up its wall's steepest edges ends (-1: none,
+// the vertex is its wall's top or on no wall).
+struct PlumbLines {
+  std::vector<Eigen::Vector3f> normal;
+  std::vector<int> top;
+  size_t num_hung() const;  // vertices with a top
+};
+
+PlumbLines MakePlumbLines(const TriangleMesh& mesh, const VertexAdjacency& adjacency);
+
+// Per vertex of `vertices`, how far it lies outside the vertical through its top, along its
+// wall's normal (m; negative: inside; 0 without a top). Empty for lines without vertices.
+std::vector<float> PlumbOffsets(const PlumbLines& lines,
+                                const std::vector<Eigen::Vector3f>& vertices);
+
+}  // namespace satmesh
