@@ -10,7 +10,11 @@
 // fifth 7%, over its highest fifth 52%; docs/benchmarks-history.md, session 46). The wall's
 // top is the roof's edge, which the roof's views place. Buildings' walls are vertical, so a
 // wall vertex the images constrain weakly is pulled towards the vertical through the top of
-// its wall, where its start leans out, in place of its start.
+// its wall, where its start leans out, in place of its start. A sharp DSM's walls lean by
+// at most a cell, which the hang takes up (from the true DSM, stereo 0.5 m seed 71:
+// facades 64.1 -> 56.1%; the refinement alone takes that start's 88.2% to 64.1%); hanging
+// half a cell outside the top, climbing a blurred wall's gentler toe, or hanging from the
+// top's start traded the degraded DSMs' gain against it or lost more (session 46).
 #include <Eigen/Core>
 #include <vector>
 
@@ -25,9 +29,9 @@ namespace satmesh {
 // the rise eases. At 45 degrees the walk went on over real roofs' rounded shoulders (the
 // Pleiades triplet's terraces on their hill: 63 degrees over the metre behind the edge)
 // and hung their walls a metre or two behind it: the pairs held out of the refinement lost
-// 0.002-0.004 of their ZNCC's rise, at 60 degrees 0.0015, at 70 at most 0.0002; on the
-// generator's scenes 70 keeps half to all of 45's facades (80: a fifth; docs/
-// benchmarks-history.md, session 46).
+// 0.001-0.004 of their ZNCC's rise, at 60 degrees 0.0004-0.0014 (the DSM's own pair fell
+// below its bar), at 70 at most 0.0002. On the generator's scenes 70 keeps half to all of
+// 45's facade gain, 80 a fifth to most (docs/benchmarks-history.md, session 46).
 inline constexpr double kPlumbMinRiseDeg = 70.0;
 
 // Per vertex: its wall's horizontal unit normal (WallNormals; zero: no wall vertex) and the
