@@ -327,8 +327,7 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
   // roof_patch_rings: made once the first pass has measured which vertices the images
   // constrain weakly (prior_weight); none without the pull towards the start.
   GradientPatches roof_patches;
-  // plumb_walls: the walls' tops, from the level's start (none without the pull towards it,
-  // nor for a pass that only measures).
+  // plumb_walls: the walls' tops at the level's start (with the pull to it; not measure-only).
   const PlumbLines plumb = level == 0 && initial_prior && !measure_only &&
                                    opt.HangsWallsPlumb(ctx.input.initial_is_mesh)
                                ? MakePlumbLines(*mesh, adjacency)
@@ -451,8 +450,9 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       // keeps its start; below the coarsest level walls are free sideways but for the hang).
       const bool hung = !plumb_offset.empty() && plumb.top[v] >= 0 &&
                         !(opt.hold_boundary_xy && adjacency.is_boundary[v]);
-      const double across = !hung ? 0.0 : std::max(double(plumb_offset[v]), coarsest ?
-                            double((mesh->vertices[v] - start[v]).dot(plumb.normal[v])) : 0.0);
+      const double from_start =
+          hung && coarsest ? double((mesh->vertices[v] - start[v]).dot(plumb.normal[v])) : 0.0;
+      const double across = hung ? std::max(double(plumb_offset[v]), from_start) : 0.0;
       if (opt.hold_unseen && seen[v] == 0) {  // no image constrains it: held, or hung plumb
         if (hung)
           mesh->vertices[v] -=

@@ -55,7 +55,10 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "from the vertices of its plane within this many edges, where they agree beyond their "
        "noise: weakly textured roofs move with their edges; 0: off"},
       {"plumb_walls", &R::plumb_walls, Range::In(-1, 1),
-       "at level 0 a wall vertex the images constrain weakly is pulled towards the vertical through its wall's top where its start leans out there, in place of its start: a DSM's sloped walls hang plumb under the roof edges the images place; 0: off; 1: on; -1: on for a DSM start, off for a mesh start (its walls are the user's model)"},
+       "at level 0 a wall vertex the images constrain weakly is pulled towards the vertical "
+       "through its wall's top where its start leans out there, in place of its start: a DSM's "
+       "sloped walls hang plumb under the roof edges the images place; 0: off; 1: on; -1: on "
+       "for a DSM start, off for a mesh start (its walls are the user's model)"},
       {"step", &R::step, Range::Above(0), "gradient step, in units of (level GSD)^2"},
       {"max_step_gsd", &R::max_step_gsd, Range::Above(0),
        "clamp of one vertex's move per iteration, in level GSD"},
