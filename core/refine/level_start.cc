@@ -52,11 +52,11 @@ bool RemeshedDsmAtFullResolution(const RefineOptions& options, bool initial_is_m
 // surface departs from them: a mesh whose resolution follows the surface, large on roofs,
 // streets and planar walls, fine at roof edges, wall feet and small structures. The larger
 // flat triangles average more pixels; the creases get 1-2 pixel triangles from the start,
-// so the crease pass (a second run of level 0 on subdivided creases) does not follow
-// (ResolveCreasePass). Tri-stereo 0.5 m seeds 1-4, against the 2-pixel remesh with its
-// crease pass (docs/benchmarks-history.md, session 36): roofs 0.318 / 0.332 / 0.322 / 0.277
-// -> 0.310 / 0.308 / 0.287 / 0.262 m, facades @0.5 m +0.2 to +1.2 points, F -0.1 to +0.3,
-// 0.6x the faces, the job 2.1x faster. One pair's start has 3.7-pixel triangles
+// so the crease pass (a second run of level 0) does not subdivide them (CreasePass; before
+// session 47 it did not follow at all). Tri-stereo 0.5 m seeds 1-4, against the 2-pixel
+// remesh with its crease pass (docs/benchmarks-history.md, session 36): roofs 0.318 / 0.332
+// / 0.322 / 0.277 -> 0.310 / 0.308 / 0.287 / 0.262 m, facades @0.5 m +0.2 to +1.2 points, F
+// -0.1 to +0.3, 0.6x the faces, the job 2.1x faster. One pair's start has 3.7-pixel triangles
 // (kOnePairFlatEdgeFactor), and those whose vertices the pair resolves to 2 GSD
 // (kOnePairResolvedSigmaGsd, LevelHeightSigma) are halved in the first round whatever the
 // initial surface does: large triangles where one pair does not constrain the height (walls

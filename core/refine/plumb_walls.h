@@ -12,7 +12,8 @@
 // wall vertex the images constrain weakly is pulled towards the vertical through the top of
 // its wall, where its start leans out, in place of its start. A sharp DSM's walls lean by
 // at most a cell, which the hang takes up (from the true DSM, stereo 0.5 m seed 71:
-// facades 64.1 -> 56.1%; the refinement alone takes that start's 88.2% to 64.1%); hanging
+// facades 64.1 -> 56.1%, 54.5% since session 47; the refinement alone takes that start's
+// 88.2% to 64.1%: a DSM whose walls are in place is declared, trusted_initial); hanging
 // half a cell outside the top, climbing a blurred wall's gentler toe, or hanging from the
 // top's start traded the degraded DSMs' gain against it or lost more (session 46).
 #include <Eigen/Core>
@@ -33,6 +34,18 @@ namespace satmesh {
 // below its bar), at 70 at most 0.0002. On the generator's scenes 70 keeps half to all of
 // 45's facade gain, 80 a fifth to most (docs/benchmarks-history.md, session 46).
 inline constexpr double kPlumbMinRiseDeg = 70.0;
+
+// Each iteration a hung vertex moves across its wall by this fraction of its offset from
+// where it hangs (its start or its top's vertical) times its pull weight (InitialPriorWeights:
+// 1 where the images do not constrain it, which then hangs at once, at most max_step_gsd an
+// iteration), ten times the pull towards the start (kInitialPullPerIteration). At that pull a
+// weakly constrained wall was still on its way after a level's 20 iterations: with 40 it
+// went further in (tri-stereo 0.3 m s1 facades @0.5 m 57.8 -> 64.0%). 1 against 0.1, 0.3 and
+// 0.5 (docs/benchmarks-history.md, session 47): tri-stereo 0.3 m s1 57.8 / 61.8 / 63.3 ->
+// 65.3%, tri-stereo 0.5 m s2 62.0 / 63.3 / 63.9 -> 64.1%, multi-date 0.3 m s2 56.3 / 56.6 /
+// 57.1 -> 57.4%, stereo 0.5 m s1 51.0 -> 51.4%, roofs within 0.002 m; the Pleiades held-out
+// pairs' rise 0.0001-0.0003 lower.
+inline constexpr double kPlumbPullPerIteration = 1.0;
 
 // Per vertex: its wall's horizontal unit normal (WallNormals; zero: no wall vertex) and the
 // top of its wall, the vertex where the walk up its wall's steepest edges ends (-1: none,

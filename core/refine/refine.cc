@@ -109,7 +109,14 @@ void EstimateBiases(const RefineInput& input, const PairSelection& selection,
 // iterations_per_level, not the coarsest level's coarsest_iterations_factor times that
 // (multi-date 0.5 m s1 / s2 / s3 / seed 53, 40 -> 20 iterations: roofs -0.003 to +0.001 m,
 // facades -0.1 to -0.5 points, under overhangs -0.1 to -0.6, F equal or +0.2, the job
-// 0.8x the time; docs/benchmarks-history.md, session 39).
+// 0.8x the time; docs/benchmarks-history.md, session 39). After the adaptive start the
+// creases have 1-pixel triangles already: level 0 runs again on them unsubdivided. Its walls
+// hang again from the tops level 0 found (plumb_walls) and the pull starts from level 0's
+// result: tri-stereo 0.5 m s1 / s2 (unseen walls hung at once in both), facades 56.8 / 57.9
+// -> 60.2 / 62.0%, F 62.0 / 66.1 -> 63.8 / 68.2, roofs 0.276 / 0.242 -> 0.278 / 0.231 m,
+// 1.3x the time; subdivided, +0.3 to +0.7 points of facades with 1.65x the faces
+// (docs/benchmarks-history.md, session 47; before the hang, session 36, the pass gained less
+// and cost roofs 2-3%, and did not follow the adaptive start).
 void CreasePass(const LevelContext& level0, TriangleMesh* mesh, RefineResult* result) {
   RefineOptions continued = level0.options;
   continued.coarsest_iterations_factor = 1;
@@ -118,10 +125,15 @@ void CreasePass(const LevelContext& level0, TriangleMesh* mesh, RefineResult* re
                          level0.gsd_m};
   const double tolerance_m = ctx.options.flat_tolerance_gsd * ctx.gsd_m;
   const size_t faces_before = mesh->num_faces();
-  const size_t subdivided = SubdivideNearCreases(tolerance_m, mesh);
-  spdlog::info("level 0, creases: {} of {} faces subdivided where a vertex is off its "
-               "neighbours' plane by more than {:.2f} m ({} faces)",
-               subdivided, faces_before, tolerance_m, mesh->num_faces());
+  if (result->adaptive_start) {
+    spdlog::info("level 0 again: the adaptive start's creases are fine already ({} faces)",
+                 faces_before);
+  } else {
+    const size_t subdivided = SubdivideNearCreases(tolerance_m, mesh);
+    spdlog::info("level 0, creases: {} of {} faces subdivided where a vertex is off its "
+                 "neighbours' plane by more than {:.2f} m ({} faces)",
+                 subdivided, faces_before, tolerance_m, mesh->num_faces());
+  }
   LevelStats stats;
   ReturnFreedMemory();  // level 0's workspaces: the pass's peak is its own
   RefineLevel(ctx, 0, std::numeric_limits<double>::quiet_NaN(), mesh, &stats);
@@ -129,13 +141,11 @@ void CreasePass(const LevelContext& level0, TriangleMesh* mesh, RefineResult* re
   result->levels.push_back(std::move(stats));
 }
 
-// crease_pass -1: on for a DSM start without coarser levels and with more than one pair,
-// unless level 0 starts from the adaptive start (its walls have 1-pixel triangles already;
-// level_start.cc, AdaptiveStart).
-int ResolveCreasePass(const RefineOptions& options, bool initial_is_mesh, size_t num_pairs,
-                      bool adaptive_start) {
+// crease_pass -1: on for a DSM start without coarser levels and with more than one pair
+// (after the adaptive start, level_start.cc, without subdividing: CreasePass).
+int ResolveCreasePass(const RefineOptions& options, bool initial_is_mesh, size_t num_pairs) {
   if (options.crease_pass >= 0) return options.crease_pass;
-  return options.levels == 0 && !initial_is_mesh && num_pairs > 1 && !adaptive_start ? 1 : 0;
+  return options.levels == 0 && !initial_is_mesh && num_pairs > 1 ? 1 : 0;
 }
 
 // Step 4: coarse to fine. Below the coarsest level, the previous level's result
@@ -383,8 +393,7 @@ RefineResult Refine(const RefineInput& input, const RefineOptions& user_options,
     level0_start = LevelStartMesh(input, options, views, result.pairs, result.gsd_m, progress, 0,
                                   nullptr, &adaptive_start);
   result.adaptive_start = adaptive_start;
-  options.crease_pass =
-      ResolveCreasePass(options, input.initial_is_mesh, result.pairs.size(), adaptive_start);
+  options.crease_pass = ResolveCreasePass(options, input.initial_is_mesh, result.pairs.size());
   CoarseToFine(input, options, progress, views, &result, std::move(level0_start),
                level0_initial_zncc);
 

@@ -24,19 +24,18 @@
 namespace satmesh {
 namespace {
 
-// At every level (initial_sigma_gsd > 0), each iteration moves a vertex back towards where
-// the level started it by this fraction of its offset times its InitialPriorWeights weight:
-// a vertex the images do not see returns most of the way within ~20 iterations, and the
-// low-frequency drift a single weakly textured pair produces is bounded instead of
-// growing with the iterations (docs/benchmarks-history.md, session 13: stereo 0.5 m roofs
-// 0.92x of the initial with 40 iterations and no pull, 0.78x with it; 0.05-0.2 give the
-// same). Below the coarsest level the start is the coarser level's result (or the initial
-// surface after a restart), and only its height pulls: a vertex the finer images constrain
-// weakly keeps the height the coarser level found instead of following their matching
-// noise, while walls stay free to move sideways, which is what the finer level is for
-// (docs/benchmarks-history.md, session 15: refined from the true surface, tri-stereo 0.3 m
-// roofs drift to 0.107 m NMAD with the pull at the coarsest level only, 0.073 m with it at
-// every level; from the DSM, 0.3 m roofs 0-4% better, facades within 0.3 points; pulling
+// At every level (initial_sigma_gsd > 0), each iteration moves a vertex back towards where the
+// level started it by this fraction of its offset times its InitialPriorWeights weight: a vertex
+// the images do not see returns most of the way within ~20 iterations, and the low-frequency drift
+// a single weakly textured pair produces is bounded instead of growing with the iterations
+// (docs/benchmarks-history.md, session 13: stereo 0.5 m roofs 0.92x of the initial with 40
+// iterations and no pull, 0.78x with it; 0.05-0.2 give the same). Below the coarsest level the
+// start is the coarser level's result (or the initial surface after a restart), and only its height
+// pulls: a vertex the finer images constrain weakly keeps the height the coarser level found
+// instead of following their matching noise, while walls stay free to move sideways, which is what
+// the finer level is for (docs/benchmarks-history.md, session 15: refined from the true surface,
+// tri-stereo 0.3 m roofs drift to 0.107 m NMAD with the pull at the coarsest level only, 0.073 m
+// with it at every level; from the DSM, 0.3 m roofs 0-4% better, facades within 0.3 points; pulling
 // in 3D below the coarsest level cost 0.3-0.5 points of facades).
 constexpr double kInitialPullPerIteration = 0.1;
 
@@ -445,18 +444,18 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
         opt.wall_beta_factor < 1 ? WallVertices(*mesh) : std::vector<char>();
 #pragma omp parallel for schedule(static)
     for (long v = 0; v < long(nv); ++v) {
-      // plumb_walls: across its wall a hung vertex is pulled towards its start or the
-      // vertical through its top, whichever lies further in (an arcade's wall inside its top
-      // keeps its start; below the coarsest level walls are free sideways but for the hang).
+      // plumb_walls (`hang`): across its wall a hung vertex is pulled to its start or to its
+      // top's vertical, whichever lies further in (an arcade keeps its start: plumb_walls.h).
       const bool hung = !plumb_offset.empty() && plumb.top[v] >= 0 &&
                         !(opt.hold_boundary_xy && adjacency.is_boundary[v]);
       const double from_start =
           hung && coarsest ? double((mesh->vertices[v] - start[v]).dot(plumb.normal[v])) : 0.0;
-      const double across = hung ? std::max(double(plumb_offset[v]), from_start) : 0.0;
+      const double hang = hung ? kPlumbPullPerIteration * double(prior_weight[v]) *
+                                     std::max(double(plumb_offset[v]), from_start)
+                               : 0.0;
       if (opt.hold_unseen && seen[v] == 0) {  // no image constrains it: held, or hung plumb
-        if (hung)
-          mesh->vertices[v] -=
-              float(kInitialPullPerIteration * prior_weight[v] * across) * plumb.normal[v];
+        if (hung)  // nothing else moves it: at most max_move an iteration
+          mesh->vertices[v] -= float(std::clamp(hang, -max_move, max_move)) * plumb.normal[v];
         continue;
       }
       Eigen::Vector3d g = gradient[v];
@@ -470,9 +469,10 @@ bool RefineLevel(const LevelContext& ctx, int level, double abandon_below, Trian
       if (initial_prior) {
         Eigen::Vector3d off = (mesh->vertices[v] - start[v]).cast<double>();
         if (!coarsest) off.x() = off.y() = 0;  // below the coarsest: heights only
-        if (hung) {  // across its wall, towards the vertical through its top
+        if (hung) {  // across its wall the hang pulls, not the start
           const Eigen::Vector3d h = plumb.normal[v].cast<double>();
-          off += (across - off.dot(h)) * h;
+          off -= off.dot(h) * h;
+          move -= hang * h;
         }
         move -= kInitialPullPerIteration * double(prior_weight[v]) * off;
       }

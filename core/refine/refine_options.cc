@@ -119,7 +119,7 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "after the full-resolution level, the faces near its creases (off their neighbours' "
        "plane by more than flat_tolerance_gsd) are subdivided and the level runs again on them; "
        "1: on, 0: off, -1: on for a DSM start without coarser levels and with more than one pair, "
-       "unless flat_edge_px makes its start adaptive"},
+       "after an adaptive start (flat_edge_px) without subdividing: its creases are fine already"},
       {"restart_from_initial", &R::restart_from_initial, {},
        "below the coarsest level, continue from the initial surface unless the previous level's "
        "result matches the images better"},

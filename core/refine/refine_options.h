@@ -129,9 +129,9 @@ struct RefineOptions {
                                    // is run again on them: the walls' triangles get 1 pixel
                                    // where a coarser level would have given the subdivision;
                                    // 1: on, 0: off, -1: on for a DSM start without
-                                   // coarser levels and with more than one pair, unless
-                                   // flat_edge_px makes its start adaptive (refine.cc,
-                                   // CreasePass)
+                                   // coarser levels and with more than one pair (after
+                                   // an adaptive start, flat_edge_px, not subdivided:
+                                   // refine.cc, CreasePass)
   bool restart_from_initial = true;  // below the coarsest level, continue from the initial
                                      // surface (remeshed at the level) unless the previous
                                      // level's result has a mean ZNCC higher by > 0.001
