@@ -259,8 +259,9 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
   result->mesh = std::move(mesh);
 }
 
-// Step 5: KeepSignificantChanges with keep_initial_sigmas (-1: 2 for a mesh start, off for
-// a DSM start), after registering the result to the initial surface (RegisterToInitial).
+// Step 5: KeepSignificantChanges with keep_initial_sigmas (-1: 2 for a mesh start or a
+// trusted DSM start, off for a DSM start), after registering the result to the initial
+// surface (RegisterToInitial).
 // Refined from the true surface of a multi-date 0.3 m scene, roofs drift by the matching
 // noise to 0.073 m NMAD without it, 0.012 m with it; from a stereo DSM it would undo real
 // corrections the images make only as a whole (stereo 0.5 m roofs 0.79x -> 0.90x of the
@@ -273,8 +274,9 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
 // give 0.192 / 0.202 m, a true start 0.045 / 0.038 m (was 0.035 / 0.025): session 20.
 void KeepInitialWithinNoise(const RefineInput& input, const RefineOptions& options,
                             RefineResult* result) {
-  const double k = options.keep_initial_sigmas < 0 ? (input.initial_is_mesh ? 2.0 : 0.0)
-                                                   : options.keep_initial_sigmas;
+  const double k = options.keep_initial_sigmas < 0
+                       ? (options.TrustsInitial(input.initial_is_mesh) ? 2.0 : 0.0)
+                       : options.keep_initial_sigmas;
   const bool registers = options.RegistersToInitial(input.initial_is_mesh);
   if (!(k > 0 || registers) || result->mesh.height_sigma.size() != result->mesh.num_vertices())
     return;

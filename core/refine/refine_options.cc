@@ -29,7 +29,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
   static const std::vector<RefineOptionInfo> table = {
       {"levels", &R::levels, Range::In(-1, 6),
        "coarsest pyramid level L (images at 1/2^L); -1: from the GSD and the initial surface's "
-       "cell (the coarse triangle edge stays under max(max_coarse_edge_m, cell))"},
+       "cell (the coarse triangle edge stays under max(max_coarse_edge_m, cell); 0 for a trusted "
+       "DSM, trusted_initial)"},
       {"max_coarse_edge_m", &R::max_coarse_edge_m, Range::Above(0),
        "levels -1: bound of the coarse mesh's triangle edge, m"},
       {"iterations_per_level", &R::iterations_per_level, Range::In(0, 1000),
@@ -58,7 +59,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "at level 0 a wall vertex the images constrain weakly is pulled towards the vertical "
        "through its wall's top where its start leans out there, in place of its start: a DSM's "
        "sloped walls hang plumb under the roof edges the images place; 0: off; 1: on; -1: on "
-       "for a DSM start, off for a mesh start (its walls are the user's model)"},
+       "for a DSM start, off for a mesh start or a trusted one (trusted_initial: its walls are "
+       "the user's model)"},
       {"step", &R::step, Range::Above(0), "gradient step, in units of (level GSD)^2"},
       {"max_step_gsd", &R::max_step_gsd, Range::Above(0),
        "clamp of one vertex's move per iteration, in level GSD"},
@@ -114,7 +116,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "thin plate's umbrella weighing each neighbour by 1 / edge length, so the images form the "
        "walls (a mesh start: its triangles as they are); 0: isotropic remesh of the DSM mesh "
        "(its walls kept); -1: the grid where the images resolve the median vertex's height at "
-       "full resolution to initial_detail_gsd, else the remesh"},
+       "full resolution to initial_detail_gsd, else (and for a trusted DSM, trusted_initial) the "
+       "remesh"},
       {"crease_pass", &R::crease_pass, Range::In(-1, 1),
        "after the full-resolution level, the faces near its creases (off their neighbours' "
        "plane by more than flat_tolerance_gsd) are subdivided and the level runs again on them; "
@@ -150,7 +153,8 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "last step: each vertex keeps its offset from the initial surface with the weight z^4 / "
        "(z^4 + this^4), z = offset / its height sigma from the images, so a change within the "
        "images' noise returns to the initial surface; 0: off; -1: 2 for a mesh start (a model "
-       "the user trusts, a previous result), off for a DSM start (stereo DSMs err beyond noise)"},
+       "the user trusts, a previous result) or a trusted DSM start (trusted_initial), off for a "
+       "DSM start (stereo DSMs err beyond noise)"},
       {"keep_initial_scales", &R::keep_initial_scales, Range::In(0, 6),
        "the last step first keeps the share of the offsets that is coherent beyond the images' "
        "noise over the vertices around each one on the same surface, at radii 8 x 2^i GSD (3: "
@@ -165,16 +169,19 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "the result in the initial surface's frame: the bias estimation puts the image block "
        "where its pairs agree best on the initial surface (else the datum of minimum "
        "corrections), the last step takes off the rigid translation left; 1: on, 0: off, -1: on "
-       "for a mesh start (a model the user trusts), off for a DSM start"},
+       "for a mesh start or a trusted DSM (trusted_initial: a model the user trusts), off for a "
+       "DSM start"},
       {"smooth_offsets", &R::smooth_offsets, Range::In(-1, 1),
        "at full resolution the thin-plate term smooths each vertex's offset from where the "
        "level started it, not the surface, so the start's creases (walls, eaves, balconies) are kept; 1: on, 0: off, "
-       "-1: on for a mesh start (a model the user trusts), off for a DSM start (its noise)"},
+       "-1: on for a mesh start or a trusted DSM (trusted_initial: a model the user trusts), off "
+       "for a DSM start (its noise)"},
       {"sunlit_pairs", &R::sunlit_pairs, Range::In(-1, 1),
        "a pixel whose surface point is lit under one image's sun and in shadow under the "
        "other's (by the current surface and the suns in the images' metadata) is left out of "
        "that pair: moving shadows of a multi-date set are not matched; 1: on, 0: off, -1: on "
-       "for a mesh start (a DSM's blurred walls cast wrong shadows)"},
+       "for a mesh start or a trusted DSM (trusted_initial; a DSM's blurred walls cast wrong "
+       "shadows)"},
       {"carry_coarse_levels", &R::carry_coarse_levels, Range::In(-1, 1),
        "below the coarsest level, start from the initial surface remeshed for the level and "
        "moved as the coarser level moved it, not from the coarser level's result (the start's "
@@ -185,7 +192,16 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
        "(mixed pixels at a roof edge move with the roof between views, so ZNCC prefers walls "
        "about half a pixel out): the finished surface's walls (faces steeper than 60 degrees) "
        "are moved this far inward before the last step; 0: off; -1: 0.5 for a DSM start, off "
-       "for a mesh start (its walls are the user's model)"},
+       "for a mesh start or a trusted one (trusted_initial: its walls are the user's model)"},
+      {"trusted_initial", &R::trusted_initial, Range::In(0, 1),
+       "1: the initial DSM is a model the user trusts as a mesh start is (LiDAR, a city model's "
+       "DSM: its walls stand where the buildings' do): it is meshed at its own cells and "
+       "remeshed at full resolution, not gridded (levels 0, grid_start), its walls are neither hung (plumb_walls) nor moved "
+       "inward (occluding_edge_bias_px), its creases are kept (smooth_offsets), shadows are "
+       "matched where lit (sunlit_pairs), a change within the images' noise returns to it "
+       "(keep_initial_sigmas 2) and the result is registered to it (register_to_initial), as "
+       "those options' -1 resolve; 0: a DSM from stereo matching "
+       "(walls fattened, errors beyond the images' noise)"},
       {"hold_unseen", &R::hold_unseen, {},
        "vertices no pair-direction sees (occluded, grazing) do not move"},
       {"hold_boundary_xy", &R::hold_boundary_xy, {},
@@ -235,6 +251,9 @@ std::string RefineOptions::Check() const {
 int ResolveLevels(const RefineOptions& options, double gsd_m, double initial_cell_m,
                   bool initial_is_mesh) {
   if (options.levels >= 0) return options.levels;
+  // A trusted DSM is right at full resolution: a coarser level only smoothed its walls
+  // (stereo 0.3 m s2 from the true DSM, F @0.5 m 87.5 with one, 91.5 without; session 47).
+  if (options.trusted_initial > 0 && !initial_is_mesh) return 0;
   const double max_edge = std::max(options.max_coarse_edge_m, initial_cell_m);
   const auto edge = [&](int level) { return options.coarse_edge_px * gsd_m * std::ldexp(1.0, level); };
   int level = 0;

@@ -28,7 +28,8 @@ struct PairOptions {
 
 struct RefineOptions {
   int levels = -1;                 // coarsest pyramid level L (images at 1/2^L);
-                                   // -1: from the GSD and the initial surface (ResolveLevels)
+                                   // -1: from the GSD and the initial surface (ResolveLevels;
+                                   // 0 for a trusted DSM, trusted_initial)
   double max_coarse_edge_m = 2.0;  // levels -1: the coarse mesh's triangle edge stays under
                                    // max(this, the initial surface's cell), so that a coarse
                                    // start does not smooth away walls and structures of
@@ -122,7 +123,8 @@ struct RefineOptions {
                                    // -1: the grid where the images resolve the median
                                    // vertex's height at full resolution to
                                    // initial_detail_gsd (multi-date sets), else the remesh
-                                   // (stereo, tri-stereo; level_start.cc, ChooseCoarseStart)
+                                   // (stereo, tri-stereo, a trusted DSM; level_start.cc,
+                                   // ChooseCoarseStart)
   int crease_pass = -1;            // after the full-resolution level, the faces near its
                                    // creases (a vertex off its neighbours' plane by more
                                    // than flat_tolerance_gsd) are subdivided and the level
@@ -176,7 +178,8 @@ struct RefineOptions {
   double keep_initial_sigmas = -1;  // last step (KeepSignificantChanges): a vertex returns to
                                    // the initial surface unless its offset from it exceeds
                                    // about this many of its height sigmas from the images;
-                                   // 0: off; -1: 2 for a mesh start, off for a DSM start
+                                   // 0: off; -1: 2 for a mesh start or a trusted DSM
+                                   // start (trusted_initial), off for a DSM start
   int keep_initial_scales = 3;     // the last step first keeps what is coherent beyond the
                                    // images' noise over neighbourhoods of radius 32, 16, 8
                                    // GSD (coarse to fine: PooledSignificantOffsets), then
@@ -188,17 +191,18 @@ struct RefineOptions {
                                    // on the initial surface (SurfaceDatum; else the datum of
                                    // minimum corrections), and the last step takes off the
                                    // rigid translation left (RegisterToInitial); 1: on,
-                                   // 0: off, -1: on for a mesh start
+                                   // 0: off, -1: on for a mesh start or a trusted DSM
   int smooth_offsets = -1;         // at full resolution (level 0) the thin-plate term acts on
                                    // each vertex's offset from where the level started it
                                    // instead of on the surface itself, so the start's creases
                                    // (walls, eaves, balconies) are not rounded off (refine_level.cc);
-                                   // 1: on, 0: off, -1: on for a mesh start
+                                   // 1: on, 0: off, -1: on for a mesh start or a trusted DSM
   int sunlit_pairs = -1;           // a pixel lit under one image's sun and in shadow under the
                                    // other's is left out of that pair-direction (moving
                                    // shadows of a multi-date set; the suns from the images'
                                    // metadata; sunlight.h); 1: on, 0: off, -1: on for a mesh
-                                   // start (a DSM's blurred walls cast wrong shadows)
+                                   // start or a trusted DSM (a DSM's blurred walls cast wrong
+                                   // shadows)
   int carry_coarse_levels = -1;    // below the coarsest level, start from the initial surface
                                    // remeshed for the level and moved as the coarser level
                                    // moved it (CarryDisplacement), not from the coarser
@@ -211,6 +215,18 @@ struct RefineOptions {
                                    // walls are moved this far inward (DeflateOccludingEdges)
                                    // before the last step; 0: off; -1: 0.5 for a DSM start,
                                    // off for a mesh start (its walls are the user's model)
+  int trusted_initial = 0;         // 1: the initial DSM is a model the user trusts as a mesh
+                                   // start is (LiDAR, a city model's DSM: its walls stand
+                                   // where the buildings' do): meshed at its own cells and
+                                   // remeshed at full resolution (levels 0, grid_start),
+                                   // its walls neither hung
+                                   // (plumb_walls) nor moved inward
+                                   // (occluding_edge_bias_px), its creases kept
+                                   // (smooth_offsets), shadows matched where lit
+                                   // (sunlit_pairs), a change within the images'
+                                   // noise returns to it (keep_initial_sigmas 2), the
+                                   // result is registered to it (register_to_initial): the
+                                   // -1 defaults of those resolve so; 0: a stereo DSM
   bool hold_unseen = true;         // vertices no pair-direction of the iteration sees
                                    // (occluded, grazing, outside the images) do not move:
                                    // the surface stays where the images say nothing
@@ -221,29 +237,32 @@ struct RefineOptions {
   PairOptions pairs;
 
   std::string Check() const;
-  // register_to_initial resolved for a mesh start or a DSM start.
+  // A mesh start or a DSM start declared trusted (trusted_initial).
+  bool TrustsInitial(bool initial_is_mesh) const { return initial_is_mesh || trusted_initial > 0; }
+  // register_to_initial resolved for a mesh start, a trusted DSM start or a DSM start.
   bool RegistersToInitial(bool initial_is_mesh) const {
-    return register_to_initial < 0 ? initial_is_mesh : register_to_initial > 0;
+    return register_to_initial < 0 ? TrustsInitial(initial_is_mesh) : register_to_initial > 0;
   }
-  // smooth_offsets resolved for a mesh start or a DSM start.
+  // smooth_offsets resolved for a mesh start, a trusted DSM start or a DSM start.
   bool SmoothsOffsets(bool initial_is_mesh) const {
-    return smooth_offsets < 0 ? initial_is_mesh : smooth_offsets > 0;
+    return smooth_offsets < 0 ? TrustsInitial(initial_is_mesh) : smooth_offsets > 0;
   }
-  // carry_coarse_levels resolved for a mesh start or a DSM start.
+  // carry_coarse_levels resolved for a mesh start or a DSM start (a trusted one's too).
   bool CarriesCoarseLevels(bool initial_is_mesh) const {
     return carry_coarse_levels < 0 ? initial_is_mesh : carry_coarse_levels > 0;
   }
-  // occluding_edge_bias_px resolved for a mesh start or a DSM start.
+  // occluding_edge_bias_px resolved for a mesh start, a trusted DSM start or a DSM start.
   double OccludingEdgeBiasPx(bool initial_is_mesh) const {
-    return occluding_edge_bias_px < 0 ? (initial_is_mesh ? 0.0 : 0.5) : occluding_edge_bias_px;
+    return occluding_edge_bias_px < 0 ? (TrustsInitial(initial_is_mesh) ? 0.0 : 0.5)
+                                      : occluding_edge_bias_px;
   }
-  // plumb_walls resolved for a mesh start or a DSM start.
+  // plumb_walls resolved for a mesh start, a trusted DSM start or a DSM start.
   bool HangsWallsPlumb(bool initial_is_mesh) const {
-    return plumb_walls < 0 ? !initial_is_mesh : plumb_walls > 0;
+    return plumb_walls < 0 ? !TrustsInitial(initial_is_mesh) : plumb_walls > 0;
   }
-  // sunlit_pairs resolved for a mesh start or a DSM start.
+  // sunlit_pairs resolved for a mesh start, a trusted DSM start or a DSM start.
   bool MatchesSunlitOnly(bool initial_is_mesh) const {
-    return sunlit_pairs < 0 ? initial_is_mesh : sunlit_pairs > 0;
+    return sunlit_pairs < 0 ? TrustsInitial(initial_is_mesh) : sunlit_pairs > 0;
   }
 };
 

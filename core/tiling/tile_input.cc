@@ -172,8 +172,9 @@ TileInput PrepareTileInput(const JobSpec& spec, Dsm dsm, double coarse_cell_m) {
   const double cell_m = std::abs(dsm.geo_transform[1]);
   std::string meshed = "meshed at its cells";
   if (mesh_cell_m < coarse_cell_m)
-    meshed = fmt::format("sharp, meshed at its {:.2f} m cells, not block-averaged to {:.2f} m",
-                         cell_m, coarse_cell_m);
+    meshed =
+        fmt::format("{}, meshed at its {:.2f} m cells, not block-averaged to {:.2f} m",
+                    spec.refine.trusted_initial > 0 ? "trusted" : "sharp", cell_m, coarse_cell_m);
   else if (mesh_cell_m > cell_m)
     meshed = fmt::format("block-averaged to {:.2f} m", mesh_cell_m);
   spdlog::info("initial DSM: height noise at one cell {:.3f} m ({:.2f} cell): {}", noise_m,
@@ -265,9 +266,9 @@ double InitialMeshCell(const RefineOptions& options, const Dsm& dsm, double coar
   const double cell_m = std::abs(dsm.geo_transform[1]);
   const double noise = DsmCellNoise(dsm);
   if (noise_m) *noise_m = noise;
-  return options.sharp_dsm_noise_cells > 0 && noise <= options.sharp_dsm_noise_cells * cell_m
-             ? std::min(cell_m, coarse_cell_m)
-             : coarse_cell_m;
+  const bool sharp =
+      options.sharp_dsm_noise_cells > 0 && noise <= options.sharp_dsm_noise_cells * cell_m;
+  return sharp || options.trusted_initial > 0 ? std::min(cell_m, coarse_cell_m) : coarse_cell_m;
 }
 
 double CoarseCellSize(const RefineOptions& options, double dsm_cell_m) {

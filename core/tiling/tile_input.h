@@ -51,8 +51,9 @@ Dsm DownsampleDsm(const Dsm& dsm, int factor);
 // remeshes it to its coarse level anyway).
 double CoarseCellSize(const RefineOptions& options, double dsm_cell_m);
 
-// The cell the initial mesh of `dsm` is made at: its own where its heights' noise at one
-// cell (DsmCellNoise) is at most options.sharp_dsm_noise_cells (> 0) cells, else
+// The cell the initial mesh of `dsm` is made at: its own where the user trusts it
+// (options.trusted_initial) or its heights' noise at one cell (DsmCellNoise) is at most
+// options.sharp_dsm_noise_cells (> 0) cells, else
 // coarse_cell_m (CoarseCellSize; its block averages halve a noisy DSM's noise and round a
 // sharp one's walls off). Synthetic 0.5 m stereo / tri-stereo / narrow stereo from a DSM
 // whose walls are in place (noise 0.06 cell): facades @0.5 m 34.8 / 36.2 / 35.2% averaged,

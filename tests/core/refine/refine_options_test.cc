@@ -175,6 +175,34 @@ TEST(RefineOptions, PlumbWallsForADsmStartNotAMeshStartByDefault) {
   }
 }
 
+// A DSM the user trusts (trusted_initial) resolves the start-dependent -1 defaults as a mesh
+// start does, but the coarse levels' carry (a DSM start's levels); explicit values win.
+TEST(RefineOptions, ATrustedDsmResolvesAsAMeshStart) {
+  RefineOptions o;
+  EXPECT_EQ(o.trusted_initial, 0);
+  EXPECT_FALSE(o.TrustsInitial(/*initial_is_mesh=*/false));
+  EXPECT_TRUE(o.TrustsInitial(/*initial_is_mesh=*/true));
+  o.trusted_initial = 1;
+  EXPECT_TRUE(o.TrustsInitial(false));
+  EXPECT_FALSE(o.HangsWallsPlumb(false));
+  EXPECT_EQ(o.OccludingEdgeBiasPx(false), 0.0);
+  EXPECT_TRUE(o.RegistersToInitial(false));
+  EXPECT_TRUE(o.SmoothsOffsets(false));
+  EXPECT_TRUE(o.MatchesSunlitOnly(false));
+  EXPECT_FALSE(o.CarriesCoarseLevels(false));
+  o.plumb_walls = 1;
+  o.occluding_edge_bias_px = 0.5;
+  o.register_to_initial = 0;
+  EXPECT_TRUE(o.HangsWallsPlumb(false));
+  EXPECT_EQ(o.OccludingEdgeBiasPx(false), 0.5);
+  EXPECT_FALSE(o.RegistersToInitial(false));
+  EXPECT_EQ(o.Check(), "");
+  for (int bad : {-1, 2}) {
+    o.trusted_initial = bad;
+    EXPECT_EQ(o.Check().rfind("trusted_initial must be", 0), 0u) << o.Check();
+  }
+}
+
 TEST(RefineOptions, NanIsOutOfRange) {
   RefineOptions o;
   o.alpha = std::nan("");

@@ -76,6 +76,13 @@ TEST(TileInput, ASharpDsmIsMeshedAtItsCellsANoisyOneFromBlockAverages) {
   spec.refine.sharp_dsm_noise_cells = 0.2;
   EXPECT_EQ(PrepareTileInput(spec, smooth, 2.0).refine.initial_mesh.vertices.size(), 100u * 80u);
   EXPECT_EQ(PrepareTileInput(spec, noisy, 2.0).refine.initial_mesh.vertices.size(), 25u * 20u);
+  // A DSM the user trusts (trusted_initial: LiDAR, a city model) is meshed at its cells
+  // whatever its noise, never coarser than the coarse cell.
+  spec.refine.sharp_dsm_noise_cells = 0;
+  spec.refine.trusted_initial = 1;
+  EXPECT_DOUBLE_EQ(InitialMeshCell(spec.refine, noisy, 2.0), 0.5);
+  EXPECT_DOUBLE_EQ(InitialMeshCell(spec.refine, smooth, 0.25), 0.25);
+  EXPECT_EQ(PrepareTileInput(spec, noisy, 2.0).refine.initial_mesh.vertices.size(), 100u * 80u);
 }
 
 TEST(TileInput, FillsTheDsmHolesBeforeMeshing) {
