@@ -196,11 +196,11 @@ const std::vector<RefineOptionInfo>& RefineOptionTable() {
       {"trusted_initial", &R::trusted_initial, Range::In(0, 1),
        "1: the initial DSM is a model the user trusts as a mesh start is (LiDAR, a city model's "
        "DSM: its walls stand where the buildings' do): it is meshed at its own cells and "
-       "remeshed at full resolution, not gridded (levels 0, grid_start), its walls are neither hung (plumb_walls) nor moved "
-       "inward (occluding_edge_bias_px), its creases are kept (smooth_offsets), shadows are "
-       "matched where lit (sunlit_pairs), a change within the images' noise returns to it "
-       "(keep_initial_sigmas 2) and the result is registered to it (register_to_initial), as "
-       "those options' -1 resolve; 0: a DSM from stereo matching "
+       "remeshed at full resolution, not gridded (levels 0, grid_start), its walls are neither "
+       "hung (plumb_walls) nor moved inward (occluding_edge_bias_px), its creases are kept "
+       "(smooth_offsets), shadows are matched where lit (sunlit_pairs), a change within the "
+       "images' noise returns to it (keep_initial_sigmas 2) and the result is registered to it "
+       "(register_to_initial), as those options' -1 resolve; 0: a DSM from stereo matching "
        "(walls fattened, errors beyond the images' noise)"},
       {"hold_unseen", &R::hold_unseen, {},
        "vertices no pair-direction sees (occluded, grazing) do not move"},
