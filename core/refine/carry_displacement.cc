@@ -47,8 +47,17 @@ TriangleMesh CarryDisplacement(const TriangleMesh& start, const TriangleMesh& en
     const double d00 = e1.dot(e1), d01 = e1.dot(e2), d11 = e2.dot(e2);
     const double d20 = q.dot(e1), d21 = q.dot(e2);
     const double den = d00 * d11 - d01 * d01;
-    const double b1 = std::clamp((d11 * d20 - d01 * d21) / den, 0.0, 1.0);
-    const double b2 = std::clamp((d00 * d21 - d01 * d20) / den, 0.0, 1.0 - b1);
+    double b1 = 0, b2 = 0;
+    if (den > 1e-12 * d00 * d11) {
+      b1 = std::clamp((d11 * d20 - d01 * d21) / den, 0.0, 1.0);
+      b2 = std::clamp((d00 * d21 - d01 * d20) / den, 0.0, 1.0 - b1);
+    } else {  // a sliver (its corners collinear in double): its nearest corner's move
+      const double q0 = q.squaredNorm(), q1 = (q - e1).squaredNorm(), q2 = (q - e2).squaredNorm();
+      if (q1 < q0 && q1 <= q2)
+        b1 = 1;
+      else if (q2 < q0)
+        b2 = 1;
+    }
     const double b0 = 1.0 - b1 - b2;
     Eigen::Vector3d moved = Eigen::Vector3d::Zero();
     const double b[3] = {b0, b1, b2};

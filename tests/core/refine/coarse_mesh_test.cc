@@ -334,6 +334,25 @@ TEST(CarryDisplacement, MovesWhatFacesUpAsTheCoarseLevelMovedIt) {
   }
   EXPECT_LT(worst_tilted, 1e-4f);
 
+  // A sliver of the coarse mesh (corners collinear in double, not in CGAL's exact test; a
+  // sharp DSM's remesh left one: den 0, the barycentric coordinates NaN, the tile failed)
+  // moves the vertex it is closest to as its nearest corner moved.
+  TriangleMesh with_sliver = start, sliver_end = end;
+  const int s0 = int(with_sliver.vertices.size());
+  for (const Eigen::Vector3f& p : {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(1, 0, 1),
+                                   Eigen::Vector3f(2, 1e-9f, 1)}) {
+    with_sliver.vertices.push_back(p);
+    sliver_end.vertices.push_back(p + Eigen::Vector3f(0, 0, 0.5f));
+  }
+  with_sliver.faces.emplace_back(s0, s0 + 1, s0 + 2);
+  TriangleMesh above = testing::CreateGridMesh(2, 0.5f);  // 1 m square at z = 1 over x 1-2
+  for (auto& p : above.vertices) p += Eigen::Vector3f(1, -0.5f, 1);
+  const TriangleMesh carried = CarryDisplacement(with_sliver, sliver_end, above);
+  const size_t centre = 4;  // (1.5, 0, 1): on the sliver
+  ASSERT_TRUE(carried.vertices[centre].allFinite());
+  EXPECT_NEAR(carried.vertices[centre].z() - above.vertices[centre].z(), 0.5f, 1e-4f);
+  for (const auto& p : carried.vertices) EXPECT_TRUE(p.allFinite());
+
   TriangleMesh fewer = end;
   fewer.vertices.pop_back();
   EXPECT_THROW(CarryDisplacement(start, fewer, target), Error);
