@@ -274,9 +274,7 @@ void CoarseToFine(const RefineInput& input, const RefineOptions& options,
 // give 0.192 / 0.202 m, a true start 0.045 / 0.038 m (was 0.035 / 0.025): session 20.
 void KeepInitialWithinNoise(const RefineInput& input, const RefineOptions& options,
                             RefineResult* result) {
-  const double k = options.keep_initial_sigmas < 0
-                       ? (options.TrustsInitial(input.initial_is_mesh) ? 2.0 : 0.0)
-                       : options.keep_initial_sigmas;
+  const double k = options.KeepInitialSigmas(input.initial_is_mesh);
   const bool registers = options.RegistersToInitial(input.initial_is_mesh);
   if (!(k > 0 || registers) || result->mesh.height_sigma.size() != result->mesh.num_vertices())
     return;

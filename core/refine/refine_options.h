@@ -251,6 +251,11 @@ struct RefineOptions {
   bool CarriesCoarseLevels(bool initial_is_mesh) const {
     return carry_coarse_levels < 0 ? initial_is_mesh : carry_coarse_levels > 0;
   }
+  // keep_initial_sigmas resolved for a mesh start, a trusted DSM start or a DSM start.
+  double KeepInitialSigmas(bool initial_is_mesh) const {
+    return keep_initial_sigmas < 0 ? (TrustsInitial(initial_is_mesh) ? 2.0 : 0.0)
+                                   : keep_initial_sigmas;
+  }
   // occluding_edge_bias_px resolved for a mesh start, a trusted DSM start or a DSM start.
   double OccludingEdgeBiasPx(bool initial_is_mesh) const {
     return occluding_edge_bias_px < 0 ? (TrustsInitial(initial_is_mesh) ? 0.0 : 0.5)

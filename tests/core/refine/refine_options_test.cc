@@ -181,9 +181,12 @@ TEST(RefineOptions, ATrustedDsmResolvesAsAMeshStart) {
   RefineOptions o;
   EXPECT_EQ(o.trusted_initial, 0);
   EXPECT_FALSE(o.TrustsInitial(/*initial_is_mesh=*/false));
+  EXPECT_EQ(o.KeepInitialSigmas(/*initial_is_mesh=*/false), 0.0);
+  EXPECT_EQ(o.KeepInitialSigmas(/*initial_is_mesh=*/true), 2.0);
   EXPECT_TRUE(o.TrustsInitial(/*initial_is_mesh=*/true));
   o.trusted_initial = 1;
   EXPECT_TRUE(o.TrustsInitial(false));
+  EXPECT_EQ(o.KeepInitialSigmas(false), 2.0);
   EXPECT_FALSE(o.HangsWallsPlumb(false));
   EXPECT_EQ(o.OccludingEdgeBiasPx(false), 0.0);
   EXPECT_TRUE(o.RegistersToInitial(false));
